@@ -1,0 +1,145 @@
+// penumbra — small RAII owners for the GL objects penumbra's own helpers, tests and benchmarks
+// create (buffers, textures, timer queries). Blocks never force these on an engine: block APIs
+// take raw GLuint names the caller owns; these classes are a convenience for callers that have
+// no wrapper of their own.
+//
+// needs: a current GL 4.5 context (DSA entry points); PENUMBRA_GL_HEADER (see gl.hpp).
+#ifndef PENUMBRA_GL_OBJECTS_HPP
+#define PENUMBRA_GL_OBJECTS_HPP
+
+#include "penumbra/gl/gl.hpp"
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace penumbra::gl {
+
+/// An owned, immutable-storage buffer object (glNamedBufferStorage).
+class Buffer {
+public:
+    Buffer() = default;
+    /// Allocates `bytes` (0 allowed: no GL object is created). `data` may be null.
+    explicit Buffer(size_t bytes, const void* data = nullptr,
+                    GLbitfield flags = GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT | GL_MAP_WRITE_BIT)
+        : size_(bytes) {
+        if (bytes == 0) return;
+        PENUMBRA_CHECK(bytes <= static_cast<size_t>(PTRDIFF_MAX), "penumbra: buffer size ", bytes, " is too large");
+        glCreateBuffers(1, &id_);
+        while (glGetError() != GL_NO_ERROR) {
+        }
+        glNamedBufferStorage(id_, static_cast<GLsizeiptr>(bytes), data, flags);
+        GLenum error = glGetError();
+        if (error != GL_NO_ERROR) {
+            glDeleteBuffers(1, &id_);
+            id_ = 0;
+            ::penumbra::detail::fail("penumbra: allocating a ", bytes, "-byte buffer failed with ", errorName(error));
+        }
+    }
+    template <typename T>
+    static Buffer fromVector(const std::vector<T>& values,
+                             GLbitfield flags = GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT | GL_MAP_WRITE_BIT) {
+        return Buffer(values.size() * sizeof(T), values.empty() ? nullptr : values.data(), flags);
+    }
+    Buffer(Buffer&& other) noexcept : id_(std::exchange(other.id_, 0)), size_(std::exchange(other.size_, 0)) {}
+    Buffer& operator=(Buffer&& other) noexcept {
+        if (this != &other) {
+            reset();
+            id_ = std::exchange(other.id_, 0);
+            size_ = std::exchange(other.size_, 0);
+        }
+        return *this;
+    }
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+    ~Buffer() { reset(); }
+
+    GLuint id() const { return id_; }
+    size_t size() const { return size_; }
+
+    void upload(size_t offset, const void* data, size_t bytes) {
+        PENUMBRA_CHECK(offset + bytes <= size_ && offset <= size_, "penumbra: upload of ", bytes, " bytes at ", offset,
+                       " exceeds the ", size_, "-byte buffer");
+        if (bytes) glNamedBufferSubData(id_, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), data);
+    }
+    /// Reads `count` elements of T starting at byte `offset`.
+    template <typename T>
+    std::vector<T> download(size_t offset = 0, size_t count = SIZE_MAX) const {
+        if (count == SIZE_MAX) count = (size_ - offset) / sizeof(T);
+        PENUMBRA_CHECK(offset <= size_ && count * sizeof(T) <= size_ - offset, "penumbra: download of ", count,
+                       " elements at ", offset, " exceeds the ", size_, "-byte buffer");
+        std::vector<T> out(count);
+        if (count) {
+            glGetNamedBufferSubData(id_, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(count * sizeof(T)),
+                                    out.data());
+        }
+        return out;
+    }
+    /// Fills the whole buffer with a 32-bit pattern (poisoning before a test, clearing counters).
+    void fill(uint32_t pattern) {
+        if (id_) glClearNamedBufferData(id_, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &pattern);
+    }
+    void reset() {
+        if (id_) glDeleteBuffers(1, &id_);
+        id_ = 0;
+        size_ = 0;
+    }
+
+private:
+    GLuint id_ = 0;
+    size_t size_ = 0;
+};
+
+/// An owned texture name (glCreateTextures); storage is the caller's business.
+class Texture {
+public:
+    Texture() = default;
+    explicit Texture(GLenum target) { glCreateTextures(target, 1, &id_); }
+    Texture(Texture&& other) noexcept : id_(std::exchange(other.id_, 0)) {}
+    Texture& operator=(Texture&& other) noexcept {
+        if (this != &other) {
+            reset();
+            id_ = std::exchange(other.id_, 0);
+        }
+        return *this;
+    }
+    Texture(const Texture&) = delete;
+    Texture& operator=(const Texture&) = delete;
+    ~Texture() { reset(); }
+    GLuint id() const { return id_; }
+    void reset() {
+        if (id_) glDeleteTextures(1, &id_);
+        id_ = 0;
+    }
+
+private:
+    GLuint id_ = 0;
+};
+
+/// GPU time of a region via GL_TIME_ELAPSED (nanoseconds). Regions must not nest.
+class GpuTimer {
+public:
+    GpuTimer() { glCreateQueries(GL_TIME_ELAPSED, 1, &id_); }
+    GpuTimer(GpuTimer&& other) noexcept : id_(std::exchange(other.id_, 0)) {}
+    GpuTimer& operator=(GpuTimer&&) = delete;
+    GpuTimer(const GpuTimer&) = delete;
+    GpuTimer& operator=(const GpuTimer&) = delete;
+    ~GpuTimer() {
+        if (id_) glDeleteQueries(1, &id_);
+    }
+    void begin() { glBeginQuery(GL_TIME_ELAPSED, id_); }
+    void end() { glEndQuery(GL_TIME_ELAPSED); }
+    /// Blocks until the result is available.
+    uint64_t nanoseconds() const {
+        GLuint64 ns = 0;
+        glGetQueryObjectui64v(id_, GL_QUERY_RESULT, &ns);
+        return ns;
+    }
+
+private:
+    GLuint id_ = 0;
+};
+
+}  // namespace penumbra::gl
+
+#endif

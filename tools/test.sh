@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The test command: installs what it needs, configures, builds and runs ctest.
+#   1. a Release build of everything and its ctest run (GL tests once on EGL, once on OSMesa;
+#      the `stress` label is excluded: run `ctest -L stress` in build/ for the long sweeps);
+#   2. an ASan+UBSan build (-DPENUMBRA_SANITIZE=ON) running the CPU tests (label `cpu`).
+# Environment: PENUMBRA_BUILD_DIR (default build), PENUMBRA_SKIP_SANITIZE=1 to skip step 2.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+"$root/tools/setup.sh"
+
+jobs=$(nproc 2>/dev/null || echo 2)
+build=${PENUMBRA_BUILD_DIR:-$root/build}
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release
+cmake --build "$build" -j"$jobs"
+
+if [ "${PENUMBRA_SKIP_SANITIZE:-0}" != 1 ]; then
+  asan="${build}-sanitize"
+  cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPENUMBRA_SANITIZE=ON \
+        -DPENUMBRA_BUILD_BENCHMARKS=OFF -DPENUMBRA_BUILD_EXAMPLES=OFF
+  cmake --build "$asan" -j"$jobs"
+  echo "== sanitizer run (ASan+UBSan, CPU tests) =="
+  (cd "$asan" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+     ctest --output-on-failure -j"$jobs" -L cpu -LE stress)
+fi
+
+echo "== main run =="
+cd "$build"
+ctest --output-on-failure -j"$jobs" -LE stress
