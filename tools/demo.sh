@@ -9,5 +9,5 @@ jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release >&2
 cmake --build "$build" -j"$jobs" --target soft_shadows >&2
 mkdir -p "$root/out"
-"$build/examples/soft_shadows/soft_shadows" --scene builtin:torus_knot --out "$root/out/soft_shadows.png" --json "$@"
+"$build/examples/soft_shadows" --scene builtin:torus_knot --out "$root/out/soft_shadows.png" --json "$@"
 echo "wrote $root/out/soft_shadows.png" >&2
