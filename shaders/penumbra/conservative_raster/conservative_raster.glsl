@@ -1,0 +1,334 @@
+// penumbra — conservative rasterization in the geometry shader (sintorn2008 §3.2, Fig. 4; the
+// exact variant after Hasselgren, Akenine-Möller & Ohlsson, GPU Gems 2 ch. 42 [HAMO05]).
+//
+// Integration summary
+//   needs:    a geometry shader with `layout(triangles) in;` and
+//             `layout(triangle_strip, max_vertices = PENUMBRA_CONSERVATIVE_MAX_VERTICES) out;`,
+//             and a PenumbraConservativeParams value for the viewport being rendered (fill it with
+//             penumbra::conservativeRasterSetup on the host; upload it however you like).
+//   hook:     PENUMBRA_CONSERVATIVE_EMIT_VERTEX(position, box) — called once per output vertex in
+//             triangle-strip order: write gl_Position = position (clip space, w = 1), your own
+//             outputs (flat ones: the hull vertices lie outside the triangle, so interpolated
+//             attributes are meaningless) and the vec4 `box` (window-space xmin, ymin, xmax, ymax)
+//             if the fragment stage clips with penumbraConservativeInsideBox, then EmitVertex().
+//             The snippet calls EndPrimitive() itself. position.z is the triangle's NDC depth plane
+//             at that hull vertex clamped to params.depth.xy (nearest vertex depth for thin ones), so
+//             inside the triangle the interpolated depth is the triangle's own. The strip is always
+//             counter-clockwise in window space: cull back faces yourself before calling.
+//   call:     int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, params) — returns the
+//             number of vertices emitted (0: dropped or culled).
+//   defines:  PENUMBRA_CONSERVATIVE_EXACT 0 = the seed's fixed 6 vertices / 4 triangles per triangle
+//             (a case-(iii) corner over-covers by at most one pixel), 1 = the exact hull (<= 7);
+//             PENUMBRA_CONSERVATIVE_DROP_DEGENERATE 1 = drop triangles thinner than the threshold
+//             (zero-area ones included) instead of covering the pixels their points/edges touch.
+//
+// Coverage contract (checked against an exact predicate in tests/conservative_raster_test.cpp):
+// let T be the triangle clipped to the near plane (dot(near_plane, clip) >= 0) and to w >= min_w,
+// projected to viewport pixels. Every pixel of the viewport whose CLOSED square [i, i+1] x [j, j+1]
+// intersects T gets at least one fragment — a pixel T touches only on its boundary counts, and so
+// does every pixel a zero-area T (segment or point) touches. The far plane is not clipped. NaN or
+// Inf in any input coordinate drops the triangle (no fragments).
+//
+// How (all hull arithmetic in viewport-relative pixels, |coordinate| <= max(W, H) + G):
+//  * unclipped triangles (all vertices inside the near plane and the guard band G) are projected
+//    in float; others are clipped in double precision in homogeneous clip space against the near
+//    plane, w >= min_w and the guard band, so far-away or near-plane vertices never reach the
+//    pixel-space arithmetic (their 1e5..1e9-pixel coordinates would swamp float precision);
+//  * the polygon is dilated by the square [-h, h]^2, h = 0.5 + margin (margin = GL subpixel snap +
+//    float error bound). A convex polygon dilated by a square is its edges translated by the square
+//    corner that supports them, joined at each vertex by 1, 2 or 3 corners of the vertex's square
+//    (Fig. 4c cases i, ii, iii). The corner an edge needs depends only on the SIGNS of its direction
+//    vector, which float subtraction gets exactly right, so orientation/sliver noise never picks a
+//    wrong corner;
+//  * fixed variant (seed): two vertices per corner — the corners supporting the incoming and the
+//    outgoing edge. In case iii those two are diagonal corners and the segment between them would
+//    cut off the middle corner, so both are pushed along their edges by 2h (one pixel): the tangent
+//    to the middle corner is reached after at most 2h because the edge normal is at least 45°
+//    from the corner's diagonal; this is the seed's "edges are extended by the width of a pixel";
+//  * exact variant and every clipped polygon: the dilated polygon itself, built from the four
+//    extreme vertices (bottom, right, top, left): the boundary chain between two consecutive
+//    extremes is translated by one square corner. That needs no turn signs, so the slightly
+//    non-convex polygons rounding can leave after clipping are still handled;
+//  * triangles whose height (2 area / diameter) is below tau = tau0 + tau_rel * diameter — slivers,
+//    collinear and coincident points — are replaced by the segment between their two farthest
+//    points dilated by h + thickness (a hexagon; a square for a point): the sliver lies within
+//    that distance of the segment, and no edge direction has to be normalised.
+#ifndef PENUMBRA_CONSERVATIVE_RASTER_GLSL
+#define PENUMBRA_CONSERVATIVE_RASTER_GLSL
+
+#include "penumbra/conservative_raster/conservative_raster_shared.h"
+
+#ifndef PENUMBRA_CONSERVATIVE_EMIT_VERTEX
+#error penumbra/conservative_raster/conservative_raster.glsl needs the hook PENUMBRA_CONSERVATIVE_EMIT_VERTEX(position, box)
+#endif
+#ifndef PENUMBRA_CONSERVATIVE_EXACT
+#define PENUMBRA_CONSERVATIVE_EXACT 0
+#endif
+#ifndef PENUMBRA_CONSERVATIVE_DROP_DEGENERATE
+#define PENUMBRA_CONSERVATIVE_DROP_DEGENERATE 0
+#endif
+
+// The polygon being dilated (viewport-relative pixels, NDC depth) and the hull being emitted.
+vec2 penumbraConservativePolygon[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
+float penumbraConservativeDepth[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
+vec2 penumbraConservativeHull[PENUMBRA_CONSERVATIVE_MAX_VERTICES];
+
+// True when no component is NaN or +-Inf (bit test: immune to fast-math folding of isnan).
+bool penumbraConservativeFinite(vec4 v) {
+    return all(notEqual(floatBitsToUint(v) & uvec4(0x7f800000u), uvec4(0x7f800000u)));
+}
+
+// Square corner k (in units of h): 0 = (+,-), 1 = (+,+), 2 = (-,+), 3 = (-,-). Corner k supports
+// the outward normals in (k * 90° - 90°, k * 90°].
+vec2 penumbraConservativeCorner(int k) {
+    return vec2(k < 2 ? 1.0 : -1.0, (k == 1 || k == 2) ? 1.0 : -1.0);
+}
+
+// The corner that supports a counter-clockwise edge with direction d (outward normal (d.y, -d.x)).
+// Only signs are read, and fl(b - a) has the sign of b - a: the choice is exact.
+int penumbraConservativeEdgeCorner(vec2 d) {
+    if (d.y > 0.0 && d.x >= 0.0) return 0;
+    if (d.x < 0.0 && d.y >= 0.0) return 1;
+    if (d.y < 0.0 && d.x <= 0.0) return 2;
+    return 3;
+}
+
+float penumbraConservativeCross(vec2 a, vec2 b) {
+    return a.x * b.y - a.y * b.x;
+}
+
+// Signed distance-like value of clip-space point c to clipping plane i (kept where >= 0):
+// 0 near plane, 1 w >= min_w, 2..5 guard band x >= -gx w, x <= gx w, y >= -gy w, y <= gy w.
+double penumbraConservativePlane(int i, dvec4 c, PenumbraConservativeParams params) {
+    if (i == 0) return dot(dvec4(params.near_plane), c);
+    if (i == 1) return c.w - double(params.clipping.w);
+    double g = double(i < 4 ? params.clipping.y : params.clipping.z);
+    double coordinate = i < 4 ? c.x : c.y;
+    return ((i & 1) == 0 ? coordinate : -coordinate) + g * c.w;
+}
+
+// Sutherland-Hodgman in double precision, homogeneous clip space; every intersection is computed
+// from the kept endpoint, so its error scales with the kept (small) coordinates. Writes the
+// projected polygon to penumbraConservativePolygon/Depth and returns its size (0: nothing left).
+int penumbraConservativeClip(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativeParams params) {
+    dvec4 poly[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
+    dvec4 next[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
+    poly[0] = dvec4(c0);
+    poly[1] = dvec4(c1);
+    poly[2] = dvec4(c2);
+    int n = 3;
+    for (int plane = 0; plane < 6 && n > 0; ++plane) {
+        int m = 0;
+        dvec4 prev = poly[n - 1];
+        double d_prev = penumbraConservativePlane(plane, prev, params);
+        for (int i = 0; i < n; ++i) {
+            dvec4 cur = poly[i];
+            double d_cur = penumbraConservativePlane(plane, cur, params);
+            if (d_cur >= 0.0) {
+                if (d_prev < 0.0) next[m++] = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                next[m++] = cur;
+            } else if (d_prev >= 0.0) {
+                next[m++] = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+            }
+            prev = cur;
+            d_prev = d_cur;
+        }
+        n = m;
+        for (int i = 0; i < n; ++i) poly[i] = next[i];
+    }
+    dvec2 half_size = dvec2(params.viewport.zw) * 0.5;
+    for (int i = 0; i < n; ++i) {
+        penumbraConservativePolygon[i] = vec2(poly[i].xy / poly[i].w * half_size + half_size);
+        penumbraConservativeDepth[i] = float(poly[i].z / poly[i].w);
+    }
+    return n;
+}
+
+// The exact dilation of the counter-clockwise polygon [0, n) by [-h, h]^2 into
+// penumbraConservativeHull (counter-clockwise). Returns the vertex count, or -1 when the extreme
+// vertices are not in counter-clockwise order (the caller then falls back to the box).
+int penumbraConservativeChainHull(int n, float h) {
+    int extreme[4] = int[4](0, 0, 0, 0);  // bottom, right, top, left; ties as in the edge rule
+    for (int i = 1; i < n; ++i) {
+        vec2 p = penumbraConservativePolygon[i];
+        vec2 b = penumbraConservativePolygon[extreme[0]];
+        vec2 r = penumbraConservativePolygon[extreme[1]];
+        vec2 t = penumbraConservativePolygon[extreme[2]];
+        vec2 l = penumbraConservativePolygon[extreme[3]];
+        if (p.y < b.y || (p.y == b.y && p.x > b.x)) extreme[0] = i;
+        if (p.x > r.x || (p.x == r.x && p.y > r.y)) extreme[1] = i;
+        if (p.y > t.y || (p.y == t.y && p.x < t.x)) extreme[2] = i;
+        if (p.x < l.x || (p.x == l.x && p.y < l.y)) extreme[3] = i;
+    }
+    int turns = 0;
+    for (int k = 0; k < 4; ++k) turns += (extreme[(k + 1) & 3] - extreme[k] + n) % n;
+    if (turns != n && turns != 0) return -1;
+    int count = 0;
+    for (int k = 0; k < 4; ++k) {
+        int length = (extreme[(k + 1) & 3] - extreme[k] + n) % n + 1;
+        vec2 corner = h * penumbraConservativeCorner(k);
+        for (int j = 0; j < length; ++j) {
+            penumbraConservativeHull[count++] = penumbraConservativePolygon[(extreme[k] + j) % n] + corner;
+        }
+    }
+    return count;
+}
+
+// The seed's fixed six vertices for a counter-clockwise, non-thin triangle in polygon[0..2].
+// Returns 6, or -1 if a corner turned by 270° (impossible for such a triangle; box fallback).
+int penumbraConservativeFixedHull(float h) {
+    for (int i = 0; i < 3; ++i) {
+        vec2 p = penumbraConservativePolygon[i];
+        vec2 d_in = p - penumbraConservativePolygon[(i + 2) % 3];
+        vec2 d_out = penumbraConservativePolygon[(i + 1) % 3] - p;
+        int k_in = penumbraConservativeEdgeCorner(d_in);
+        int k_out = penumbraConservativeEdgeCorner(d_out);
+        int steps = (k_out - k_in) & 3;
+        if (steps == 3) return -1;
+        vec2 a = p + h * penumbraConservativeCorner(k_in);
+        vec2 b = p + h * penumbraConservativeCorner(k_out);
+        if (steps == 2) {  // case iii: extend both edges by one pixel (2h) past the corner
+            a += (2.0 * h) * normalize(d_in);
+            b -= (2.0 * h) * normalize(d_out);
+        }
+        penumbraConservativeHull[2 * i] = a;
+        penumbraConservativeHull[2 * i + 1] = b;
+    }
+    return 6;
+}
+
+int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConservativeParams params) {
+    if (!(penumbraConservativeFinite(clip0) && penumbraConservativeFinite(clip1) &&
+          penumbraConservativeFinite(clip2))) {
+        return 0;  // contract: NaN/Inf drops the triangle
+    }
+    vec2 size = params.viewport.zw;
+    vec2 half_size = 0.5 * size;
+    float h = params.expansion.x;
+
+    // 1. The polygon in viewport-relative pixels: fast path or clipped in double precision.
+    vec4 c[3] = vec4[3](clip0, clip1, clip2);
+    bool inside = true;
+    for (int i = 0; i < 3; ++i) {
+        inside = inside && dot(params.near_plane, c[i]) >= 0.0 && c[i].w >= params.clipping.w &&
+                 abs(c[i].x) <= params.clipping.y * c[i].w && abs(c[i].y) <= params.clipping.z * c[i].w;
+    }
+    int n = 3;
+    if (inside) {
+        for (int i = 0; i < 3; ++i) {
+            penumbraConservativePolygon[i] = c[i].xy / c[i].w * half_size + half_size;
+            penumbraConservativeDepth[i] = c[i].z / c[i].w;
+        }
+    } else {
+        n = penumbraConservativeClip(clip0, clip1, clip2, params);
+        if (n == 0) return 0;
+    }
+
+    // 2. Orientation, diameter and thinness (relative to a local origin: vertex 0).
+    vec2 origin = penumbraConservativePolygon[0];
+    float area2 = 0.0;
+    for (int i = 1; i + 1 < n; ++i) {
+        area2 += penumbraConservativeCross(penumbraConservativePolygon[i] - origin,
+                                           penumbraConservativePolygon[i + 1] - origin);
+    }
+    float diameter2 = 0.0;
+    int far_a = 0, far_b = 0;
+    for (int i = 0; i < n; ++i) {
+        for (int j = i + 1; j < n; ++j) {
+            vec2 d = penumbraConservativePolygon[j] - penumbraConservativePolygon[i];
+            float d2 = dot(d, d);
+            if (d2 > diameter2) {
+                diameter2 = d2;
+                far_a = i;
+                far_b = j;
+            }
+        }
+    }
+    float diameter = sqrt(diameter2);
+    bool thin = abs(area2) <= (params.expansion.z + params.expansion.w * diameter) * diameter;
+#if PENUMBRA_CONSERVATIVE_DROP_DEGENERATE
+    if (thin) return 0;
+#endif
+
+    // 3. Depth plane z(p) = z0 + dot(gradient, p - origin) from Newell's normal; thin: nearest z.
+    float z0 = penumbraConservativeDepth[0];
+    vec2 gradient = vec2(0.0);
+    if (thin) {
+        for (int i = 1; i < n; ++i) z0 = min(z0, penumbraConservativeDepth[i]);
+    } else {
+        vec3 normal = vec3(0.0);
+        vec3 mean = vec3(0.0);
+        for (int i = 0; i < n; ++i) {
+            vec3 a = vec3(penumbraConservativePolygon[i] - origin, penumbraConservativeDepth[i]);
+            int j = i + 1 < n ? i + 1 : 0;
+            vec3 b = vec3(penumbraConservativePolygon[j] - origin, penumbraConservativeDepth[j]);
+            normal += vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+            mean += a;
+        }
+        mean /= float(n);
+        gradient = -normal.xy / normal.z;
+        z0 = mean.z - dot(gradient, mean.xy);
+    }
+
+    // 4. Thin polygons become the segment between their farthest points, dilated by h + thickness.
+    if (thin) {
+        vec2 a = penumbraConservativePolygon[far_a];
+        vec2 b = penumbraConservativePolygon[far_b];
+        float thickness = 0.0;
+        if (diameter > 0.0) {
+            for (int i = 0; i < n; ++i) {
+                thickness = max(thickness, abs(penumbraConservativeCross(penumbraConservativePolygon[i] - a, b - a)));
+            }
+            thickness /= diameter;
+        }
+        h += thickness;
+        penumbraConservativePolygon[0] = a;
+        penumbraConservativePolygon[1] = b;
+        n = 2;
+    } else if (area2 < 0.0) {  // clockwise (back-facing) input: walk it the other way
+        for (int i = 0; i < n / 2; ++i) {
+            vec2 t = penumbraConservativePolygon[i];
+            penumbraConservativePolygon[i] = penumbraConservativePolygon[n - 1 - i];
+            penumbraConservativePolygon[n - 1 - i] = t;
+        }
+    }
+
+    // 5. Pixel-expanded bounding box (handed to the fragment stage) and viewport culling.
+    vec2 lo = penumbraConservativePolygon[0];
+    vec2 hi = lo;
+    for (int i = 1; i < n; ++i) {
+        lo = min(lo, penumbraConservativePolygon[i]);
+        hi = max(hi, penumbraConservativePolygon[i]);
+    }
+    lo -= vec2(h);
+    hi += vec2(h);
+    if (any(greaterThan(lo, size)) || any(lessThan(hi, vec2(0.0)))) return 0;
+    vec4 box = vec4(lo + params.viewport.xy, hi + params.viewport.xy);
+
+    // 6. The hull.
+    int count = -1;
+#if !PENUMBRA_CONSERVATIVE_EXACT
+    if (inside && !thin) count = penumbraConservativeFixedHull(h);
+    else
+#endif
+        count = penumbraConservativeChainHull(n, h);
+    if (count < 0) {  // never expected; the box is always conservative
+        penumbraConservativeHull[0] = lo;
+        penumbraConservativeHull[1] = vec2(hi.x, lo.y);
+        penumbraConservativeHull[2] = hi;
+        penumbraConservativeHull[3] = vec2(lo.x, hi.y);
+        count = 4;
+    }
+
+    // 7. Emit the convex polygon as a zig-zag strip: 0, 1, n-1, 2, n-2, ... (all counter-clockwise).
+    for (int j = 0; j < count; ++j) {
+        int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
+        vec2 p = penumbraConservativeHull[index];
+        float z = clamp(z0 + dot(gradient, p - origin), params.depth.x, params.depth.y);
+        PENUMBRA_CONSERVATIVE_EMIT_VERTEX(vec4(p / half_size - 1.0, z, 1.0), box);
+    }
+    EndPrimitive();
+    return count;
+}
+
+#endif
