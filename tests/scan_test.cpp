@@ -1,0 +1,747 @@
+// penumbra scan: the CPU twin against the standard library, the pure plan, and the GPU scan against
+// the CPU twin (sizes across work-group, block, level, dispatch-limit and binding-window edges;
+// exclusive and inclusive; in place and out of place; nonzero and unaligned offsets; wrap-around),
+// the workgroup-scan snippet through its hook, the GL state contract and every input error.
+// Outputs are poisoned before each run and every element is checked; guard words around every
+// range must survive. Seeds are printed; PENUMBRA_SEED=<n> replays one.
+#include "shader_catalog.hpp"
+
+#include <penumbra/gl/headless.hpp>
+#include <penumbra/gl/objects.hpp>
+#include <penumbra/gl/shader.hpp>
+#include <penumbra/scan.hpp>
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <functional>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+uint32_t testSeed() {
+    const char* env = std::getenv("PENUMBRA_SEED");
+    return env && *env ? static_cast<uint32_t>(std::strtoul(env, nullptr, 10)) : std::random_device{}();
+}
+
+std::vector<uint32_t> randomValues(std::mt19937& rng, size_t n) {
+    std::vector<uint32_t> v(n);
+    for (auto& x : v) x = rng();  // full 32-bit range: sums wrap mod 2^32 many times
+    return v;
+}
+
+std::vector<uint32_t> cpuScan(const std::vector<uint32_t>& in, penumbra::ScanKind kind) {
+    std::vector<uint32_t> out(in.size());
+    penumbra::scanCpu(in.data(), out.data(), in.size(), kind);
+    return out;
+}
+
+// "" when equal, else the first differing index and values.
+std::string firstMismatch(const std::vector<uint32_t>& got, const std::vector<uint32_t>& want) {
+    if (got.size() != want.size()) return "size " + std::to_string(got.size()) + " != " + std::to_string(want.size());
+    for (size_t i = 0; i < got.size(); ++i) {
+        if (got[i] != want[i]) {
+            size_t wrong = 0;
+            for (size_t j = i; j < got.size(); ++j) wrong += got[j] != want[j];
+            return "element " + std::to_string(i) + ": got " + std::to_string(got[i]) + ", want " +
+                   std::to_string(want[i]) + " (" + std::to_string(wrong) + " wrong)";
+        }
+    }
+    return {};
+}
+
+template <typename F>
+std::string errorOf(F&& f) {
+    try {
+        f();
+    } catch (const penumbra::Error& e) {
+        return e.what();
+    }
+    return "(no penumbra::Error thrown)";
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+}  // namespace
+
+// ---- CPU: the twin and the plan -----------------------------------------------------------------
+
+TEST_CASE("scanCpu equals std::exclusive_scan / std::inclusive_scan, in place and out of place") {
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (size_t n : {size_t(0), size_t(1), size_t(2), size_t(3), size_t(255), size_t(256), size_t(257),
+                     size_t(4097), size_t(65537), size_t(1000003)}) {
+        CAPTURE(n);
+        std::vector<uint32_t> in = randomValues(rng, n);
+        std::vector<uint32_t> want_ex(n), want_in(n);
+        std::exclusive_scan(in.begin(), in.end(), want_ex.begin(), uint32_t(0));
+        std::inclusive_scan(in.begin(), in.end(), want_in.begin());
+        std::vector<uint32_t> out(n, 0xdeadbeefu);
+        penumbra::scanCpu(in.data(), out.data(), n, penumbra::ScanKind::Exclusive);
+        CHECK(firstMismatch(out, want_ex) == "");
+        std::fill(out.begin(), out.end(), 0xdeadbeefu);
+        penumbra::scanCpu(in.data(), out.data(), n, penumbra::ScanKind::Inclusive);
+        CHECK(firstMismatch(out, want_in) == "");
+        std::vector<uint32_t> inplace = in;
+        penumbra::scanCpu(inplace.data(), inplace.data(), n, penumbra::ScanKind::Exclusive);
+        CHECK(firstMismatch(inplace, want_ex) == "");
+        inplace = in;
+        penumbra::scanCpu(inplace.data(), inplace.data(), n, penumbra::ScanKind::Inclusive);
+        CHECK(firstMismatch(inplace, want_in) == "");
+    }
+    // Wrap-around: 0xFFFFFFFF = -1 mod 2^32.
+    std::vector<uint32_t> ones(70000, 0xFFFFFFFFu), out(ones.size());
+    penumbra::scanCpu(ones.data(), out.data(), ones.size(), penumbra::ScanKind::Exclusive);
+    for (size_t i = 0; i < out.size(); ++i) {
+        if (out[i] != static_cast<uint32_t>(0u - static_cast<uint32_t>(i))) FAIL("wrap-around at ", i);
+    }
+    penumbra::scanCpu(nullptr, nullptr, 0, penumbra::ScanKind::Inclusive);  // n == 0: no access
+    std::vector<uint32_t> buf(16, 1u);
+    CHECK(contains(errorOf([&] { penumbra::scanCpu(buf.data(), buf.data() + 1, 8, penumbra::ScanKind::Exclusive); }),
+                   "offset 1 elements"));
+    CHECK(contains(errorOf([&] { penumbra::scanCpu(nullptr, buf.data(), 3, penumbra::ScanKind::Exclusive); }),
+                   "null input"));
+}
+
+namespace {
+
+// Every plan must satisfy these, whatever n, options and limits.
+void checkPlanInvariants(const penumbra::ScanPlan& p, const penumbra::ScanLimits& limits) {
+    CAPTURE(p.n);
+    uint64_t covered = 0, dispatches = 0;
+    for (uint64_t w = 0; w < p.windows; ++w) {
+        CAPTURE(w);
+        const auto& levels = p.windowLevels(w);
+        REQUIRE(!levels.empty());
+        CHECK(p.windowFirst(w) == covered);
+        covered += levels[0].count;
+        if (w < p.main_windows) {
+            CHECK(levels[0].count <= p.window_elements);
+            CHECK((levels[0].count % 4 == 0 || p.n < 4));  // uvec4 kernels never see a partial uvec4
+        }
+        // The binding of a window fits GL_MAX_SHADER_STORAGE_BLOCK_SIZE whatever the offset.
+        CHECK((levels[0].count + p.alignment / 4 - 1) * 4 <= limits.max_binding_bytes);
+        uint64_t previous_end = p.alignment;  // the carry word comes first
+        for (size_t l = 0; l < levels.size(); ++l) {
+            CAPTURE(l);
+            const penumbra::ScanLevel& level = levels[l];
+            CHECK(level.tiles == penumbra::detail::divUp(level.count, p.items_per_thread));
+            CHECK(level.top == (l + 1 == levels.size()));
+            CHECK(level.grid.x <= limits.max_groups_x);
+            CHECK(level.grid.y <= limits.max_groups_y);
+            if (level.top) {
+                CHECK(level.count <= p.top_elements);
+                CHECK(level.grid.groups == 1);
+            } else {
+                CHECK(level.count > p.top_elements);
+                CHECK(level.grid.groups == penumbra::detail::divUp(level.tiles, p.group_size));
+                CHECK(uint64_t(level.grid.x) * level.grid.y >= level.grid.groups);
+                CHECK(levels[l + 1].count == level.tiles);
+                CHECK(level.partials_offset % p.alignment == 0);
+                CHECK(level.partials_offset >= previous_end);
+                previous_end = level.partials_offset + level.tiles * 4;
+                CHECK(previous_end <= p.scratch_bytes);
+            }
+        }
+        if (p.windows > 1) CHECK(p.scratch_bytes >= p.alignment);
+        dispatches += 2 * levels.size() - 1;
+    }
+    CHECK(covered == p.n);
+    CHECK(dispatches == p.dispatches);
+    CHECK(p.scratch_bytes <= limits.max_binding_bytes);
+}
+
+}  // namespace
+
+TEST_CASE("planScan: windows, levels, tiles, folded grids and scratch without GL") {
+    using penumbra::planScan;
+    penumbra::ScanLimits llvmpipe;  // the values Mesa llvmpipe reports
+    llvmpipe.max_binding_bytes = 134217728;
+    llvmpipe.binding_alignment = 16;
+
+    const penumbra::ScanPlan defaults = planScan(0, {}, llvmpipe);
+    CHECK(defaults.group_size == PENUMBRA_SCAN_DEFAULT_GROUP_SIZE);
+    CHECK(defaults.items_per_thread == PENUMBRA_SCAN_DEFAULT_ITEMS_PER_THREAD);
+    CHECK(defaults.windows == 0);
+    CHECK(defaults.levels.empty());
+    CHECK(defaults.scratch_bytes == 0);
+    CHECK(defaults.dispatches == 0);
+
+    // The numbers below use 256 invocations x 32 items (8192 elements per group).
+    penumbra::ScanOptions o32;
+    o32.group_size = 256;
+    o32.items_per_thread = 32;
+    CHECK(planScan(0, o32, llvmpipe).top_elements == 8192);
+
+    // One group's worth: the top pass alone, no scratch.
+    const penumbra::ScanPlan one = planScan(8192, o32, llvmpipe);
+    CHECK(one.windows == 1);
+    REQUIRE(one.levels.size() == 1);
+    CHECK(one.levels[0].top);
+    CHECK(one.levels[0].tiles == 256);
+    CHECK(one.scratch_bytes == 0);
+    CHECK(one.dispatches == 1);
+
+    // Two levels: reduce (257 tile sums), top, scan.
+    const penumbra::ScanPlan two = planScan(8196, o32, llvmpipe);
+    CHECK(two.windows == 1);
+    CHECK(two.tail_elements == 0);
+    REQUIRE(two.levels.size() == 2);
+    CHECK(two.levels[0].tiles == 257);
+    CHECK(two.levels[0].grid.groups == 2);
+    CHECK(two.levels[0].partials_offset == 16);  // after the carry word, 16-byte aligned
+    CHECK(two.levels[1].count == 257);
+    CHECK(two.levels[1].top);
+    CHECK(two.scratch_bytes == 16 + 1040);
+    CHECK(two.dispatches == 3);
+
+    // A ragged tail (n % 4 != 0, n > 4) becomes its own single-group window after the carry.
+    const penumbra::ScanPlan ragged = planScan(8193, o32, llvmpipe);
+    CHECK(ragged.tail_elements == 1);
+    CHECK(ragged.main_windows == 1);
+    CHECK(ragged.windows == 2);
+    REQUIRE(ragged.levels.size() == 1);
+    CHECK(ragged.levels[0].count == 8192);
+    REQUIRE(ragged.tail_levels.size() == 1);
+    CHECK(ragged.tail_levels[0].count == 1);
+    CHECK(ragged.windowFirst(1) == 8192);
+    CHECK(&ragged.windowLevels(1) == &ragged.tail_levels);
+    CHECK(ragged.scratch_bytes == 16);  // the carry word only
+    CHECK(ragged.dispatches == 2);
+    const penumbra::ScanPlan three = planScan(3, o32, llvmpipe);  // n < 4: one scalar window
+    CHECK(three.tail_elements == 0);
+    CHECK(three.windows == 1);
+    CHECK(three.scratch_bytes == 0);
+
+    // 2^24: tiles of 32 shrink it to 2^19, 2^14, 512 elements; 512 fits the top pass.
+    const penumbra::ScanPlan p24 = planScan(uint64_t(1) << 24, o32, llvmpipe);
+    CHECK(p24.windows == 1);
+    REQUIRE(p24.levels.size() == 4);
+    CHECK(p24.levels[0].grid.groups == 2048);
+    CHECK(p24.levels[1].count == (1u << 19));
+    CHECK(p24.levels[2].count == (1u << 14));
+    CHECK(p24.levels[3].count == 512);
+    CHECK(p24.scratch_bytes == 16 + (1u << 21) + (1u << 16) + 2048);
+    CHECK(p24.dispatches == 7);
+
+    // 2^28 needs windows: 128 MiB per binding holds 2^25 - 3 uints after the slack of a 16-byte
+    // aligned start, rounded down to whole 8192-element groups' worth.
+    const penumbra::ScanPlan p28 = planScan(uint64_t(1) << 28, o32, llvmpipe);
+    CHECK(p28.window_elements == (uint64_t(1) << 25) - 8192);
+    CHECK(p28.main_windows == 9);
+    CHECK(p28.windows == 9);
+    REQUIRE(p28.levels.size() == 4);
+    CHECK(p28.levels[0].grid.groups == 4095);
+    CHECK(p28.last_levels[0].count == 65536);
+    CHECK(p28.last_levels.size() == 2);
+    CHECK(p28.scratch_bytes == 16 + 4193280 + 131040 + 4096);
+    CHECK(p28.dispatches == 8 * 7 + 3);
+
+    // Past the 65 535-group limit: 32 x 4 = 128-element groups, 65 537 groups fold into 2 rows.
+    penumbra::ScanOptions small;
+    small.group_size = 32;
+    small.items_per_thread = 4;
+    const uint64_t n_fold = 65536ull * 128 + 4;
+    const penumbra::ScanPlan fold = planScan(n_fold, small, llvmpipe);
+    CHECK(fold.tail_elements == 0);
+    CHECK(fold.levels[0].grid.groups == 65537);
+    CHECK(fold.levels[0].grid.y == 2);
+    CHECK(fold.levels.size() == 10);
+
+    // A 256-byte binding alignment (the GL maximum, the default limits) spaces the arrays.
+    const penumbra::ScanPlan wide = planScan(n_fold, small);
+    CHECK(wide.alignment == 256);
+    CHECK(wide.levels[0].partials_offset == 256);
+    CHECK(wide.levels[1].partials_offset == 256 + penumbra::detail::alignUp(2097153 * 4, 256));
+    CHECK(wide.window_elements == ((uint64_t(1) << 25) - 63) / 128 * 128);
+
+    // Explicit windows: whole groups' worth, carry word even with one level per window.
+    penumbra::ScanOptions windowed = small;
+    windowed.window_elements = 3 * 128 + 5;  // rounds down to 384
+    const penumbra::ScanPlan win = planScan(1000, windowed, llvmpipe);
+    CHECK(win.window_elements == 384);
+    CHECK(win.windows == 3);
+    CHECK(win.levels.size() == 2);
+    CHECK(win.last_levels[0].count == 232);
+    CHECK(win.windowFirst(2) == 768);
+    CHECK(win.dispatches == 9);
+    windowed.window_elements = 128;
+    const penumbra::ScanPlan win1 = planScan(300, windowed, llvmpipe);
+    CHECK(win1.windows == 3);
+    CHECK(win1.levels.size() == 1);
+    CHECK(win1.last_levels[0].count == 44);
+    CHECK(win1.scratch_bytes == 16);
+    CHECK(win1.dispatches == 3);
+
+    // The invariants over a sweep of sizes, options and limits.
+    penumbra::ScanLimits odd_limits;
+    odd_limits.max_binding_bytes = 1 << 20;
+    odd_limits.binding_alignment = 64;
+    odd_limits.max_groups_x = 1000;
+    const penumbra::ScanLimits all_limits[] = {llvmpipe, penumbra::ScanLimits{}, odd_limits};
+    penumbra::ScanOptions big;
+    big.group_size = 1024;
+    big.items_per_thread = 64;
+    const penumbra::ScanOptions all_options[] = {penumbra::ScanOptions{}, small, big, windowed};
+    for (const auto& limits : all_limits) {
+        for (const auto& options : all_options) {
+            for (uint64_t n : {uint64_t(1), uint64_t(5), uint64_t(127), uint64_t(4097), uint64_t(65537), uint64_t(1000003),
+                               (uint64_t(1) << 26) + 5, uint64_t(1) << 28, penumbra::kScanMaxElements}) {
+                // Thousands of tiny windows add nothing but run time.
+                if ((options.window_elements || limits.max_binding_bytes < (1u << 27)) && n > (1u << 26)) continue;
+                checkPlanInvariants(planScan(n, options, limits), limits);
+            }
+        }
+    }
+
+    // Errors name the value.
+    CHECK(contains(errorOf([&] { planScan(penumbra::kScanMaxElements + 1, {}, llvmpipe); }), "4294967296"));
+    penumbra::ScanOptions bad;
+    bad.group_size = 48;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "group_size 48"));
+    bad.group_size = 2048;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "group_size 2048"));
+    bad.group_size = 16;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "group_size 16"));
+    bad = {};
+    bad.items_per_thread = 6;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "items_per_thread 6"));
+    bad.items_per_thread = 68;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "items_per_thread 68"));
+    bad = {};
+    bad.window_elements = 100;
+    CHECK(contains(errorOf([&] { planScan(10, bad); }), "window_elements 100"));
+    penumbra::ScanLimits tiny;
+    tiny.max_binding_bytes = 1024;
+    CHECK(contains(errorOf([&] { planScan(10, {}, tiny); }), "GL_MAX_SHADER_STORAGE_BLOCK_SIZE 1024"));
+    penumbra::ScanLimits small_groups;
+    small_groups.max_group_size = 128;
+    CHECK(contains(errorOf([&] { planScan(10, {}, small_groups); }), "[32, 128]"));
+}
+
+// ---- GPU ------------------------------------------------------------------------------------------
+
+namespace {
+
+penumbra::gl::HeadlessContext& context() {
+    static penumbra::gl::HeadlessContext ctx;
+    return ctx;
+}
+
+penumbra::Scanner& defaultScanner() {
+    context();
+    static penumbra::Scanner scanner;
+    return scanner;
+}
+
+constexpr uint32_t kPoison = 0xdeadbeefu;
+constexpr uint32_t kGuard = 0x5ca1ab1eu;
+constexpr size_t kGuardWords = 16;
+
+// One GPU run: input placed at in_offset (bytes) of its buffer, output at out_offset of another
+// buffer (or of the same buffer when in_place), guard words everywhere else; checks every output
+// element against the CPU twin and that every guard word survived.
+void checkGpuScan(penumbra::Scanner& scanner, const std::vector<uint32_t>& values, penumbra::ScanKind kind,
+                  bool in_place, size_t in_offset, size_t out_offset) {
+    const size_t n = values.size();
+    CAPTURE(n);
+    CAPTURE(penumbra::scanKindName(kind));
+    CAPTURE(in_place);
+    CAPTURE(in_offset);
+    CAPTURE(out_offset);
+    if (in_place) out_offset = in_offset;
+    const size_t in_words = in_offset / 4 + n + kGuardWords;
+    std::vector<uint32_t> in_image(in_words, kGuard);
+    std::copy(values.begin(), values.end(), in_image.begin() + static_cast<ptrdiff_t>(in_offset / 4));
+    penumbra::gl::Buffer in_buffer = penumbra::gl::Buffer::fromVector(in_image);
+    penumbra::gl::Buffer out_buffer;
+    if (!in_place) {
+        out_buffer = penumbra::gl::Buffer((out_offset / 4 + n + kGuardWords) * 4);
+        out_buffer.fill(kGuard);
+        // Poison the output range.
+        std::vector<uint32_t> poison(n, kPoison);
+        if (n) out_buffer.upload(out_offset, poison.data(), n * 4);
+    }
+    const GLuint out_id = in_place ? in_buffer.id() : out_buffer.id();
+    scanner.scan(kind, in_buffer.id(), in_offset, out_id, out_offset, n);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // the caller's half of the contract
+    penumbra::gl::checkErrors("scan");
+
+    const std::vector<uint32_t> want = cpuScan(values, kind);
+    const penumbra::gl::Buffer& result_buffer = in_place ? in_buffer : out_buffer;
+    std::vector<uint32_t> image = result_buffer.download<uint32_t>();
+    std::vector<uint32_t> got(image.begin() + static_cast<ptrdiff_t>(out_offset / 4),
+                              image.begin() + static_cast<ptrdiff_t>(out_offset / 4 + n));
+    CHECK(firstMismatch(got, want) == "");
+    // Guards around the output range (and, out of place, the untouched input).
+    size_t bad_guards = 0;
+    for (size_t i = 0; i < out_offset / 4; ++i) bad_guards += image[i] != kGuard;
+    for (size_t i = out_offset / 4 + n; i < image.size(); ++i) bad_guards += image[i] != kGuard;
+    CHECK(bad_guards == 0);
+    if (!in_place) {
+        std::vector<uint32_t> in_after = in_buffer.download<uint32_t>();
+        CHECK(firstMismatch(in_after, in_image) == "");
+    }
+}
+
+}  // namespace
+
+TEST_CASE("GPU scan equals the CPU twin across sizes, kinds, placements and offsets") {
+    penumbra::Scanner& scanner = defaultScanner();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed, " on ", context().renderer(), " (", context().platform(), "), workgroup scans on ",
+            std::string(penumbra::scanSubgroupsName(scanner.subgroupMode())));
+    std::mt19937 rng(seed);
+    const uint64_t sizes[] = {0, 1, 2, 255, 256, 257, 4095, 4096, 4097, 65537, (1u << 20) + 3, (1u << 24) + 1};
+    for (uint64_t n : sizes) {
+        const std::vector<uint32_t> values = randomValues(rng, n);
+        // Offsets cover both addressing modes: 16-byte multiples use the uvec4 kernels, other
+        // multiples of 4 the scalar ones (and bind at an aligned offset with an element shift).
+        checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, false, 16, 48);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, false, 4, 40);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, true, 12, 0);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, true, 64, 0);
+    }
+}
+
+TEST_CASE("GPU scan wraps around mod 2^32 like the CPU twin") {
+    penumbra::Scanner& scanner = defaultScanner();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    std::vector<uint32_t> big(100003);
+    for (auto& x : big) x = 0xF0000000u | (rng() & 0x0FFFFFFFu);  // every partial sum wraps
+    checkGpuScan(scanner, big, penumbra::ScanKind::Exclusive, false, 0, 0);
+    checkGpuScan(scanner, big, penumbra::ScanKind::Inclusive, true, 8, 0);
+    std::vector<uint32_t> ones(70001, 0xFFFFFFFFu);
+    checkGpuScan(scanner, ones, penumbra::ScanKind::Exclusive, false, 20, 4);
+}
+
+TEST_CASE("GPU scan past the 65 535-group dispatch limit (2D-folded grids, many levels)") {
+    context();
+    penumbra::ScanOptions options;
+    options.group_size = 32;
+    options.items_per_thread = 4;
+    penumbra::Scanner scanner(options);
+    const uint64_t n = 65536ull * 128 + 1;
+    const penumbra::ScanPlan plan = scanner.plan(n);
+    CHECK(plan.levels[0].grid.groups > 65535);
+    CHECK(plan.levels[0].grid.y > 1);
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed, "; ", plan.levels[0].grid.groups, " groups as ", plan.levels[0].grid.x, " x ",
+            plan.levels[0].grid.y, ", ", plan.levels.size(), " levels");
+    std::mt19937 rng(seed);
+    const std::vector<uint32_t> values = randomValues(rng, n);
+    checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, false, 32, 4);
+    checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, true, 16, 0);
+}
+
+TEST_CASE("GPU scan carries the running total across binding windows") {
+    context();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    SUBCASE("small explicit windows, one and two levels per window") {
+        penumbra::ScanOptions options;
+        options.group_size = 32;
+        options.items_per_thread = 4;
+        for (uint64_t window : {uint64_t(128), uint64_t(3 * 128)}) {
+            options.window_elements = window;
+            penumbra::Scanner scanner(options);
+            for (uint64_t n : {uint64_t(127), uint64_t(128), uint64_t(129), uint64_t(10 * 384 + 77)}) {
+                CAPTURE(window);
+                const std::vector<uint32_t> values = randomValues(rng, n);
+                checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, false, 4, 8);
+                checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, true, 16, 0);
+            }
+        }
+    }
+    SUBCASE("several levels per window") {
+        penumbra::ScanOptions options;
+        options.group_size = 32;
+        options.items_per_thread = 4;
+        options.window_elements = 128 * 130;  // 4160 tiles: their sums need more levels
+        penumbra::Scanner scanner(options);
+        const uint64_t n = 5 * 128 * 130 / 2 + 3;
+        CHECK(scanner.plan(n).levels.size() == 5);
+        CHECK(scanner.plan(n).main_windows == 3);
+        CHECK(scanner.plan(n).tail_elements == 3);
+        const std::vector<uint32_t> values = randomValues(rng, n);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, false, 12, 16);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, true, 32, 0);
+    }
+    SUBCASE("the driver's GL_MAX_SHADER_STORAGE_BLOCK_SIZE") {
+        penumbra::Scanner& scanner = defaultScanner();
+        const uint64_t window = scanner.plan(1).window_elements;
+        const uint64_t n = window + 4099;
+        const penumbra::ScanPlan plan = scanner.plan(n);
+        MESSAGE("GL_MAX_SHADER_STORAGE_BLOCK_SIZE ", scanner.limits().max_binding_bytes, " bytes: windows of ", window,
+                " elements; n = ", n, " runs in ", plan.windows, " windows");
+        CHECK(plan.main_windows == 2);
+        CHECK((window + 3) * 4 <= scanner.limits().max_binding_bytes);
+        const std::vector<uint32_t> values = randomValues(rng, n);
+        checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, false, 4, 0);
+    }
+}
+
+TEST_CASE("subgroup path against the forced portable path") {
+    context();
+    penumbra::ScanOptions portable_options;
+    portable_options.allow_subgroups = false;
+    penumbra::Scanner portable(portable_options);
+    CHECK_FALSE(portable.usesSubgroups());
+    CHECK(portable.subgroupMode() == penumbra::ScanSubgroups::None);
+    penumbra::Scanner& preferred = defaultScanner();
+    const uint32_t khr = penumbra::detail::computeSubgroupSize();
+    const penumbra::ScanSubgroups expected =
+        khr != 0 && preferred.options().group_size % khr == 0 ? penumbra::ScanSubgroups::Khr
+        : penumbra::detail::glHasExtension("GL_ARB_shader_ballot") ? penumbra::ScanSubgroups::Ballot
+                                                                    : penumbra::ScanSubgroups::None;
+    MESSAGE(context().renderer(), ": default scanner uses ", std::string(penumbra::scanSubgroupsName(preferred.subgroupMode())),
+            " (KHR subgroup size ", khr, ")");
+    CHECK(preferred.subgroupMode() == expected);  // the construction self-check must pass too
+    CHECK(preferred.usesSubgroups() == (expected != penumbra::ScanSubgroups::None));
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (uint64_t n : {uint64_t(1), uint64_t(300), uint64_t(8193), uint64_t(1000001)}) {
+        const std::vector<uint32_t> values = randomValues(rng, n);
+        checkGpuScan(preferred, values, penumbra::ScanKind::Exclusive, false, 0, 16);
+        checkGpuScan(portable, values, penumbra::ScanKind::Exclusive, false, 0, 16);
+        checkGpuScan(preferred, values, penumbra::ScanKind::Inclusive, true, 4, 0);
+        checkGpuScan(portable, values, penumbra::ScanKind::Inclusive, true, 4, 0);
+    }
+}
+
+TEST_CASE("other group sizes and items per thread") {
+    context();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    const std::pair<uint32_t, uint32_t> configs[] = {{32, 4}, {64, 8}, {128, 16}, {512, 4}, {1024, 64}};
+    for (bool subgroups : {true, false}) {
+        for (auto [group, items] : configs) {
+            penumbra::ScanOptions options;
+            options.group_size = group;
+            options.items_per_thread = items;
+            options.allow_subgroups = subgroups;
+            penumbra::Scanner scanner(options);
+            CAPTURE(group);
+            CAPTURE(items);
+            CAPTURE(std::string(penumbra::scanSubgroupsName(scanner.subgroupMode())));
+            const uint64_t block = uint64_t(group) * items;
+            for (uint64_t n : {block - 1, block, block + 1, 3 * block * block / 2 + 5}) {
+                if (n > (1u << 21)) n = (1u << 21) + 7;
+                const std::vector<uint32_t> values = randomValues(rng, n);
+                checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, false, 8, 4);
+                checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, true, 48, 0);
+            }
+        }
+    }
+}
+
+TEST_CASE("bad input raises penumbra::Error naming the value") {
+    penumbra::Scanner& scanner = defaultScanner();
+    penumbra::gl::Buffer a(1024), b(1024);
+    GLuint no_storage = 0;
+    glCreateBuffers(1, &no_storage);
+    const GLuint never_created = 0x7ffffff0u;
+    auto scan = [&](GLuint in, size_t in_off, GLuint out, size_t out_off, uint64_t n) {
+        return errorOf([&] { scanner.exclusive(in, in_off, out, out_off, n); });
+    };
+    CHECK(contains(scan(0, 0, b.id(), 0, 4), "input buffer 0 is not a buffer object"));
+    CHECK(contains(scan(a.id(), 0, 0, 0, 4), "output buffer 0 is not a buffer object"));
+    CHECK(contains(scan(never_created, 0, b.id(), 0, 4), "buffer 2147483632 is not a buffer object"));
+    CHECK(contains(scan(no_storage, 0, b.id(), 0, 4), "has no storage (GL_BUFFER_SIZE 0"));
+    CHECK(contains(scan(a.id(), 0, no_storage, 0, 4), "output buffer " + std::to_string(no_storage) + " has no storage"));
+    CHECK(contains(scan(a.id(), 6, b.id(), 0, 4), "input offset 6 bytes is not a multiple of 4"));
+    CHECK(contains(scan(a.id(), 0, b.id(), 2, 4), "output offset 2 bytes is not a multiple of 4"));
+    CHECK(contains(scan(a.id(), 0, b.id(), 0, 257), "input range of n = 257 elements at offset 0 (1028 bytes) exceeds"));
+    CHECK(contains(scan(a.id(), 0, b.id(), 0, 257), "GL_BUFFER_SIZE 1024"));
+    CHECK(contains(scan(a.id(), 4, b.id(), 0, 256), "input range of n = 256 elements at offset 4"));
+    CHECK(contains(scan(a.id(), 0, b.id(), 1020, 2), "output range of n = 2 elements at offset 1020"));
+    CHECK(contains(scan(a.id(), 2048, b.id(), 0, 1), "at offset 2048"));
+    CHECK(contains(scan(a.id(), 0, b.id(), 0, penumbra::kScanMaxElements + 1), "n = 4294967296"));
+    CHECK(contains(scan(a.id(), 0, a.id(), 4, 10), "input offset 0 and output offset 4 overlap"));
+    CHECK(contains(scan(a.id(), 40, a.id(), 0, 11), "input offset 40 and output offset 0 overlap"));
+    // Touching but disjoint ranges in one buffer, and the identical range, are fine.
+    CHECK(scan(a.id(), 0, a.id(), 40, 10) == "(no penumbra::Error thrown)");
+    CHECK(scan(a.id(), 8, a.id(), 8, 10) == "(no penumbra::Error thrown)");
+    CHECK(contains(errorOf([&] { scanner.scratchBytes(penumbra::kScanMaxElements + 1); }), "n = 4294967296"));
+    // Options are checked when the scanner is built.
+    penumbra::ScanOptions bad;
+    bad.group_size = 100;
+    CHECK(contains(errorOf([&] { penumbra::Scanner s(bad); }), "group_size 100"));
+    bad = {};
+    bad.items_per_thread = 5;
+    CHECK(contains(errorOf([&] { penumbra::Scanner s(bad); }), "items_per_thread 5"));
+    glDeleteBuffers(1, &no_storage);
+    // n == 0 is a no-op that looks at nothing.
+    CHECK(scan(0, 3, 0, 5, 0) == "(no penumbra::Error thrown)");
+    penumbra::gl::checkErrors("bad input");
+}
+
+TEST_CASE("GL state contract, scratch reporting, moves") {
+    context();
+    penumbra::ScanOptions options;
+    options.group_size = 64;
+    options.items_per_thread = 4;
+    penumbra::Scanner scanner(options);
+    CHECK(scanner.scratchBytes(0) == 0);
+    CHECK(scanner.scratchBytes(256) == 0);  // one block
+    CHECK(scanner.scratchBytes(257) == scanner.plan(257).scratch_bytes);
+    CHECK(scanner.scratchBytes(257) > 0);
+    scanner.reserve(1u << 20);
+    CHECK(scanner.scratchCapacity() == scanner.scratchBytes(1u << 20));
+    CHECK(scanner.scratchBuffer() != 0);
+
+    // The scan's first barrier makes a shader write just before it visible: fill the input with a
+    // compute copy and scan it with no barrier in between.
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    const size_t n = 100000;  // multiple of 4: the copy moves uvec4s
+    const std::vector<uint32_t> values = randomValues(rng, n);
+    penumbra::gl::Buffer source = penumbra::gl::Buffer::fromVector(values);
+    penumbra::gl::Buffer input(n * 4), output(n * 4);
+    input.fill(kPoison);
+    output.fill(kPoison);
+    penumbra::gl::Program copy = penumbra::gl::buildComputeProgram("penumbra/common/copy.comp.glsl");
+    copy.use();
+    glUniform1ui(copy.uniform("penumbraCopyCount"), static_cast<GLuint>(n / 4));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, source.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, input.id());
+    const auto grid = penumbra::detail::foldDispatch(penumbra::detail::divUp(n / 4, 256));
+    glDispatchCompute(grid.x, grid.y, 1);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, source.id());  // a binding the scanner must not touch
+    scanner.inclusive(input.id(), 0, output.id(), 0, n);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    CHECK(firstMismatch(output.download<uint32_t>(), cpuScan(values, penumbra::ScanKind::Inclusive)) == "");
+    CHECK(penumbra::gl::getInteger(GL_CURRENT_PROGRAM) == 0);
+    for (GLuint b = 0; b < PENUMBRA_SCAN_BINDING_COUNT; ++b) {
+        CAPTURE(b);
+        CHECK(penumbra::gl::getInteger(GL_SHADER_STORAGE_BUFFER_BINDING, b) == 0);
+    }
+    CHECK(penumbra::gl::getInteger(GL_SHADER_STORAGE_BUFFER_BINDING) == 0);
+    CHECK(static_cast<GLuint>(penumbra::gl::getInteger(GL_SHADER_STORAGE_BUFFER_BINDING, 7)) == source.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, 0);
+
+    // Moves transfer the programs and the scratch; the moved-from scanner owns nothing.
+    const GLuint scratch = scanner.scratchBuffer();
+    penumbra::Scanner moved(std::move(scanner));
+    CHECK(moved.scratchBuffer() == scratch);
+    CHECK(scanner.scratchBuffer() == 0);  // NOLINT(bugprone-use-after-move): checking the moved-from state
+    output.fill(kPoison);
+    moved.exclusive(source.id(), 0, output.id(), 0, n);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    CHECK(firstMismatch(output.download<uint32_t>(), cpuScan(values, penumbra::ScanKind::Exclusive)) == "");
+    penumbra::Scanner assigned;
+    assigned = std::move(moved);
+    CHECK(assigned.scratchBuffer() == scratch);
+    CHECK(glIsBuffer(scratch));
+    penumbra::gl::checkErrors("state contract");
+}
+
+TEST_CASE("workgroup.glsl through its hook in a test-only kernel") {
+    context();
+    const penumbra::ShaderLibrary lib = penumbra::test::catalogLibrary();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    struct Variant {
+        const char* key;
+        uint32_t group_size;
+        bool two_d;
+    };
+    std::vector<Variant> variants = {{"scan_workgroup_test.comp.glsl", 1, false},
+                                     {"scan_workgroup_test.comp.glsl", 32, false},
+                                     {"scan_workgroup_test.comp.glsl", 100, false},
+                                     {"scan_workgroup_test.comp.glsl", 256, false},
+                                     {"scan_workgroup_test.comp.glsl", 257, false},
+                                     {"scan_workgroup_test.comp.glsl", 1024, false},
+                                     {"scan_workgroup_test.comp.glsl", 64, true}};
+    if (penumbra::detail::computeSubgroupSize() != 0) {
+        for (uint32_t size : {32u, 256u, 1024u}) variants.push_back({"scan_workgroup_subgroups_test.comp.glsl", size, false});
+    } else {
+        MESSAGE("no GL_KHR_shader_subgroup arithmetic on ", context().renderer(),
+                ": its variant is only validated by glslangValidator");
+    }
+    if (penumbra::detail::glHasExtension("GL_ARB_shader_ballot")) {
+        for (uint32_t size : {32u, 256u, 1024u}) variants.push_back({"scan_workgroup_ballot_test.comp.glsl", size, false});
+        variants.push_back({"scan_workgroup_ballot_test.comp.glsl", 64, true});
+    } else {
+        MESSAGE("no GL_ARB_shader_ballot on ", context().renderer(), ": its variant is only validated by glslangValidator");
+    }
+    const uint32_t groups = 3;
+    for (const Variant& v : variants) {
+        CAPTURE(v.key);
+        CAPTURE(v.group_size);
+        CAPTURE(v.two_d);
+        penumbra::ShaderDefines defines = {{"PENUMBRA_SCAN_GROUP_SIZE", std::to_string(v.group_size)}};
+        if (v.two_d) defines.push_back({"PENUMBRA_SCAN_TEST_2D", ""});
+        penumbra::gl::Program program = penumbra::gl::buildComputeProgram(v.key, defines, lib);
+        const size_t n = size_t(groups) * v.group_size;
+        std::vector<uint32_t> values = randomValues(rng, n);
+        penumbra::gl::Buffer in = penumbra::gl::Buffer::fromVector(values);
+        penumbra::gl::Buffer out(n * 6 * 4);
+        out.fill(kPoison);
+        program.use();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, in.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out.id());
+        glDispatchCompute(groups, 1, 1);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        const std::vector<uint32_t> got = out.download<uint32_t>();
+        std::vector<uint32_t> want(n * 6);
+        for (uint32_t g = 0; g < groups; ++g) {
+            uint32_t ex = 0, in3 = 0, red = 0, total = 0, total3 = 0, plain = 0;
+            for (uint32_t i = 0; i < v.group_size; ++i) {
+                total += values[g * v.group_size + i];
+                total3 += 3u * values[g * v.group_size + i];
+                red += values[g * v.group_size + i] ^ 0x80000000u;
+            }
+            for (uint32_t i = 0; i < v.group_size; ++i) {
+                const size_t e = size_t(g) * v.group_size + i;
+                in3 += 3u * values[e];
+                want[6 * e + 0] = ex;
+                want[6 * e + 1] = total;
+                want[6 * e + 2] = in3;
+                want[6 * e + 3] = total3;
+                want[6 * e + 4] = red;
+                want[6 * e + 5] = plain;
+                ex += values[e];
+                plain += values[e] + 1u;
+            }
+        }
+        CHECK(firstMismatch(got, want) == "");
+        penumbra::gl::checkErrors("workgroup kernel");
+    }
+    // A kernel that forgets the hook gets a compile error naming it.
+    const std::string error = errorOf([&] { penumbra::gl::buildComputeProgram("scan_workgroup_test.comp.glsl", {}, lib); });
+    INFO(error);
+    CHECK(contains(error, "PENUMBRA_SCAN_GROUP_SIZE"));
+    CHECK(contains(error, "penumbra/scan/workgroup.glsl"));
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("GPU scan of 2^26 + 5 and 2^28 elements (windows of GL_MAX_SHADER_STORAGE_BLOCK_SIZE)") {
+        penumbra::Scanner& scanner = defaultScanner();
+        const uint32_t seed = testSeed();
+        MESSAGE("seed ", seed);
+        std::mt19937 rng(seed);
+        for (uint64_t n : {(uint64_t(1) << 26) + 5, uint64_t(1) << 28}) {
+            const auto start = std::chrono::steady_clock::now();
+            const std::vector<uint32_t> values = randomValues(rng, n);
+            MESSAGE("n = ", n, ": ", scanner.plan(n).windows, " windows, ", scanner.plan(n).dispatches, " dispatches");
+            checkGpuScan(scanner, values, penumbra::ScanKind::Exclusive, true, 4, 0);
+            if (n < (uint64_t(1) << 28)) checkGpuScan(scanner, values, penumbra::ScanKind::Inclusive, false, 16, 12);
+            MESSAGE("n = ", n, " took ",
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), " s");
+        }
+    }
+}
