@@ -1,0 +1,1149 @@
+// penumbra — view-sample lists per light texel (sintorn2008 §3, §3.1, §4.3, Fig. 2, 3, 9).
+//
+// Integration summary
+//   needs:    a GL 4.5 context (compute shaders, SSBOs); PENUMBRA_GL_HEADER (see gl/gl.hpp); the
+//             scan block (penumbra/scan.hpp) for pass 2; shaders from the embedded table or a
+//             ShaderLibrary you pass in.
+//   input:    view samples, either a buffer of vec4 world positions (w == 0 marks "no sample") or
+//             the view's depth texture + inverse view-projection; world normals (buffer or
+//             texture) for the light-facing test; the light's view-projection and grid W x H; the
+//             light as vec4 (w = 1: xyz = position; w = 0: xyz = direction towards the light).
+//   produces: per light texel a list of the samples that project into it (§3.1): counts (list
+//             lengths), offsets (exclusive scan of counts), list positions (vec4) and sample ids
+//             (uint) stored structure-of-arrays by slot; per sample its slot (or NO_SLOT) and its
+//             texel (or REJECTED + reason); counters by rejection reason; on request the §4.3
+//             fitted light frustum and the Fig. 9 list statistics.
+//   GLSL:     penumbra/sample_lists/sample_lists.glsl walks a texel's list from the integrator's
+//             own light pass and penumbra/sample_lists/shadow_bits.glsl addresses the packed
+//             per-sample shadow bits; both read the integrator's buffers through hooks. Walk long
+//             lists in blocks over several passes (penumbraSampleListsBlock, §3.1 multi-pass):
+//             llvmpipe ends an invocation's loops after 65 535 iterations in total. The shadow
+//             bits (shadowBitsBytes) are the integrator's buffer; it clears them before its pass.
+//   passes:   1 count (count.comp.glsl: classify, atomicAdd on the texel counter = local index),
+//             2 exclusive scan of the W*H counters (penumbra::Scanner), 3 scatter
+//             (scatter.comp.glsl: slot = offset + local index). Optional: fit.comp.glsl (§4.3)
+//             and statistics.comp.glsl (Fig. 9).
+//   CPU twin: buildSampleListsCpu (counting sort), fitLightFrustumCpu, sampleListStatisticsCpu
+//             compute the identical structure, fit and statistics.
+//
+// Pure setup (no GL): sampleListsSetup() validates the grid and the sample count and says how many
+// bytes every buffer needs; sampleListsParams() builds the uniform block; shadowBitsBytes() sizes
+// the shadow bits. The caller owns every buffer and texture; SampleListBuilder owns only its
+// programs, a 176-byte uniform buffer and the Scanner (and the Scanner's scratch).
+//
+// Rules (identical on GPU and CPU)
+//   Projection: t = T * (p, 1) with T = bias * light view-projection (T maps the frustum to
+//     0 <= x, y, z <= w), float32, fixed operation order, no FMA (GLSL `precise`; the host
+//     blocks contraction with detail::mulRounded), so the texel of every sample agrees bit for
+//     bit with the CPU twin on drivers with correctly rounded float32 add/mul/div (llvmpipe).
+//   Borders: u = t.x / t.w; 0 <= u <= 1 is inside (closed), x = min(floor(u * W), W - 1): a
+//     sample exactly on an inner texel border belongs to the texel with the larger index, u == 1
+//     to the last texel; u < 0 or u > 1 (as t.x < 0 or t.x > t.w) is Outside. Same for v and H.
+//     t.w <= 0 (behind a point light's eye plane) or a non-finite t is Outside too.
+//   Near/far: with LightDepthRange::MinusOneToOne (GL clip z in [-w, w], GLM's default) or
+//     ZeroToOne, a sample whose light depth lies outside [near, far] (closed) is rejected as
+//     Depth; LightDepthRange::Unclipped keeps them (only the side planes and w > 0 count).
+//   Rejection precedence: Background (position w == 0 / depth == 1.0), NonFinite (NaN/Inf in the
+//     position, or in the normal when culling), Outside, Depth, BackFacing (!(dot(n, to_light)
+//     > 0), to_light = light.xyz - p, or light.xyz for a directional light; Fig. 2). Each
+//     rejected sample is counted once, under the first reason that applies.
+//   Order within a list: on the GPU the local index comes from atomics, so the order of samples
+//     inside one list is nondeterministic; the CPU twin orders every list by sample id. Compare
+//     structures modulo order (sampleListsDifference): same counts and offsets, the same set of
+//     (id, position) per list, and every sample's slot pointing at its own id.
+//   Sample ids: the buffer index, or y * view width + x for the depth input (row 0 = bottom).
+//
+// GL state contract (SampleListBuilder)
+//   Changes, without restoring: the current program, GL_UNIFORM_BUFFER binding 0,
+//   GL_SHADER_STORAGE_BUFFER bindings 0-7, for the depth input texture units 0 and 1 (and the
+//   sampler objects bound there: set to 0), plus whatever penumbra::Scanner binds.
+//   Barriers: issues GL_SHADER_STORAGE_BARRIER_BIT between its passes and, before returning,
+//   GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT, so the integrator's shaders
+//   can read the lists through SSBOs and the host can read them back. Inputs written by shaders
+//   need the caller's barrier first (e.g. GL_SHADER_STORAGE_BARRIER_BIT,
+//   GL_TEXTURE_FETCH_BARRIER_BIT); a depth texture rendered through a framebuffer needs none.
+//   Textures of the depth input: GL_TEXTURE_2D, level 0 read with texelFetch, compare mode
+//   GL_NONE; bit-exact CPU agreement needs GL_DEPTH_COMPONENT32F (or the values read back).
+#ifndef PENUMBRA_SAMPLE_LISTS_HPP
+#define PENUMBRA_SAMPLE_LISTS_HPP
+
+#include "penumbra/detail/shared.hpp"
+// The shared header lives with the shaders (STYLE.md habit 2): found on the include path when the
+// shaders/ directory is on it, else next to this header in the source tree.
+#if defined(__has_include) && __has_include(<penumbra/sample_lists/sample_lists_shared.h>)
+#include <penumbra/sample_lists/sample_lists_shared.h>
+#else
+#include "../../shaders/penumbra/sample_lists/sample_lists_shared.h"
+#endif
+
+#include "penumbra/detail/dispatch.hpp"
+#include "penumbra/error.hpp"
+#include "penumbra/gl/gl.hpp"
+#include "penumbra/gl/objects.hpp"
+#include "penumbra/gl/shader.hpp"
+#include "penumbra/scan.hpp"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra {
+
+using SampleListsParams = shared::PenumbraSampleListsParams;
+using SampleListsHeader = shared::PenumbraSampleListsHeader;
+
+// What the shaders assume about the shared structs.
+static_assert(sizeof(SampleListsParams) == 176, "PenumbraSampleListsParams must be 176 bytes (std140 == std430)");
+static_assert(offsetof(SampleListsParams, light) == 128 && offsetof(SampleListsParams, grid) == 144 &&
+                  offsetof(SampleListsParams, view) == 160,
+              "PenumbraSampleListsParams member offsets must match GLSL std140");
+static_assert(sizeof(SampleListsHeader) == 4 * PENUMBRA_SAMPLE_LISTS_HEADER_WORDS,
+              "PenumbraSampleListsHeader size must match PENUMBRA_SAMPLE_LISTS_HEADER_WORDS");
+static_assert(offsetof(SampleListsHeader, rejected) == 16 &&
+                  offsetof(SampleListsHeader, fit_min_u) == 4 * PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MIN_WORD &&
+                  offsetof(SampleListsHeader, fit_max_u) == 4 * PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MAX_WORD &&
+                  offsetof(SampleListsHeader, occupied_lists) == 4 * PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD,
+              "PenumbraSampleListsHeader word offsets must match the PENUMBRA_SAMPLE_LISTS_HEADER_* constants");
+static_assert(PENUMBRA_SAMPLE_LISTS_REASON_COUNT <= 8, "rejected[] holds 8 reasons");
+
+inline constexpr uint32_t kSampleListsGroupSize = PENUMBRA_SAMPLE_LISTS_GROUP_SIZE;
+inline constexpr uint32_t kSampleListsMaxGridSide = PENUMBRA_SAMPLE_LISTS_MAX_GRID_SIDE;
+/// Largest sample count: ids and slots stay below every sentinel and group arithmetic in 32 bits.
+inline constexpr uint32_t kSampleListsMaxSamples = 0xFFFFFF00u;
+/// sample_slots[id] of a rejected sample.
+inline constexpr uint32_t kSampleListsNoSlot = PENUMBRA_SAMPLE_LISTS_NO_SLOT;
+/// sample_texels[id] >= kSampleListsRejected: rejected, reason = value - kSampleListsRejected.
+inline constexpr uint32_t kSampleListsRejected = PENUMBRA_SAMPLE_LISTS_REJECTED;
+inline constexpr uint32_t kSampleListsReasonCount = PENUMBRA_SAMPLE_LISTS_REASON_COUNT;
+/// Largest bits-per-sample of the packed shadow state (§4.2 uses 128-1024 light samples).
+inline constexpr uint32_t kSampleListsMaxShadowBits = 65536u;
+
+/// Why a sample is not in any list (precedence = declaration order, see "Rules").
+enum class SampleRejection : uint32_t {
+    Background = PENUMBRA_SAMPLE_LISTS_REASON_BACKGROUND,
+    NonFinite = PENUMBRA_SAMPLE_LISTS_REASON_NON_FINITE,
+    Outside = PENUMBRA_SAMPLE_LISTS_REASON_OUTSIDE,
+    Depth = PENUMBRA_SAMPLE_LISTS_REASON_DEPTH,
+    BackFacing = PENUMBRA_SAMPLE_LISTS_REASON_BACK_FACING,
+};
+
+inline const char* sampleRejectionName(SampleRejection reason) {
+    switch (reason) {
+        case SampleRejection::Background: return "background";
+        case SampleRejection::NonFinite: return "non_finite";
+        case SampleRejection::Outside: return "outside";
+        case SampleRejection::Depth: return "depth";
+        case SampleRejection::BackFacing: return "back_facing";
+    }
+    return "unknown";
+}
+
+/// Clip-space depth convention of the light's projection, and whether near/far reject samples.
+enum class LightDepthRange {
+    MinusOneToOne,  ///< GL / GLM default: -w <= z <= w inside
+    ZeroToOne,      ///< GLM_FORCE_DEPTH_ZERO_TO_ONE / glClipControl: 0 <= z <= w inside
+    Unclipped,      ///< near and far planes ignored (only the side planes and w > 0 count)
+};
+
+/// The light the samples are projected for.
+struct SampleListsLight {
+    glm::mat4 view_projection{1.0f};    ///< light view-projection (clip space; depth per LightDepthRange)
+    glm::vec4 light{0.0f, 0.0f, 0.0f, 1.0f};  ///< w = 1: xyz = position; w = 0: xyz = direction towards the light
+};
+
+/// Value-initialised = defaults.
+struct SampleListsOptions {
+    bool cull_back_facing = true;  ///< Fig. 2: only light-front-facing samples enter the lists
+    LightDepthRange depth_range = LightDepthRange::MinusOneToOne;
+};
+
+/// The view a depth input comes from.
+struct SampleListsView {
+    uint32_t width = 0, height = 0;            ///< view (depth texture) size; sample count = width * height
+    glm::mat4 inverse_view_projection{1.0f};   ///< clip -> world of the view camera
+    bool depth_zero_to_one = false;            ///< view clip z in [0, w] (else GL's [-w, w])
+};
+
+// ---------------------------------------------------------------------------------------------
+// Setup (pure C++)
+
+/// Sizes and dispatch grids of one build. Every *_bytes is what the caller's buffer must hold.
+struct SampleListsSetup {
+    uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H
+    uint32_t sample_count = 0;                 ///< view samples (ids 0 .. sample_count - 1)
+    uint32_t lists = 0;                        ///< W * H
+    size_t counts_bytes = 0;          ///< uint[W*H]: list lengths (pass-1 counters)
+    size_t offsets_bytes = 0;         ///< uint[W*H]: list offsets (exclusive scan of counts)
+    size_t list_positions_bytes = 0;  ///< vec4[sample_count] by slot (worst case: all accepted)
+    size_t list_ids_bytes = 0;        ///< uint[sample_count] by slot
+    size_t sample_slots_bytes = 0;    ///< uint[sample_count] by sample id
+    size_t sample_texels_bytes = 0;   ///< uint[sample_count] by sample id
+    size_t header_bytes = 0;          ///< SampleListsHeader
+    detail::DispatchGrid sample_groups;  ///< one invocation per sample (count, scatter, fit)
+    detail::DispatchGrid list_groups;    ///< one invocation per list (statistics)
+};
+
+/// Validates the grid (1 <= W, H <= kSampleListsMaxGridSide) and the sample count
+/// (<= kSampleListsMaxSamples); throws penumbra::Error naming the bad value.
+inline SampleListsSetup sampleListsSetup(uint32_t grid_width, uint32_t grid_height, uint64_t sample_count) {
+    PENUMBRA_CHECK(grid_width >= 1 && grid_width <= kSampleListsMaxGridSide,
+                   "penumbra::sampleListsSetup: grid width ", grid_width, " is outside [1, ", kSampleListsMaxGridSide, "]");
+    PENUMBRA_CHECK(grid_height >= 1 && grid_height <= kSampleListsMaxGridSide,
+                   "penumbra::sampleListsSetup: grid height ", grid_height, " is outside [1, ", kSampleListsMaxGridSide, "]");
+    PENUMBRA_CHECK(sample_count <= kSampleListsMaxSamples, "penumbra::sampleListsSetup: sample count ", sample_count,
+                   " exceeds ", kSampleListsMaxSamples);
+    SampleListsSetup s;
+    s.grid_width = grid_width;
+    s.grid_height = grid_height;
+    s.sample_count = static_cast<uint32_t>(sample_count);
+    s.lists = grid_width * grid_height;
+    s.counts_bytes = s.offsets_bytes = size_t(s.lists) * 4;
+    s.list_positions_bytes = size_t(sample_count) * 16;
+    s.list_ids_bytes = s.sample_slots_bytes = s.sample_texels_bytes = size_t(sample_count) * 4;
+    s.header_bytes = sizeof(SampleListsHeader);
+    s.sample_groups = detail::foldDispatch(detail::divUp(sample_count, kSampleListsGroupSize));
+    s.list_groups = detail::foldDispatch(detail::divUp(s.lists, kSampleListsGroupSize));
+    return s;
+}
+
+/// bias * view_projection: world -> homogeneous light texture space, where the frustum is
+/// 0 <= x, y, z <= w (z is biased like x and y unless the projection is ZeroToOne already).
+/// Computed once on the host in float; the GPU and the CPU twin use the very same matrix.
+inline glm::mat4 lightTextureMatrix(const glm::mat4& view_projection, LightDepthRange range) {
+    glm::mat4 bias(1.0f);
+    bias[0][0] = bias[1][1] = 0.5f;
+    bias[3][0] = bias[3][1] = 0.5f;
+    if (range != LightDepthRange::ZeroToOne) {
+        bias[2][2] = 0.5f;
+        bias[3][2] = 0.5f;
+    }
+    return bias * view_projection;
+}
+
+/// The uniform block of the count/scatter/fit passes (and of the CPU twin). `view` only for the
+/// depth input. Throws penumbra::Error for a non-finite matrix or light, a light w other than
+/// 0 or 1, or a zero light direction.
+inline SampleListsParams sampleListsParams(const SampleListsSetup& setup, const SampleListsLight& light,
+                                           const SampleListsOptions& options = {},
+                                           const SampleListsView* view = nullptr) {
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 4; ++r) {
+            PENUMBRA_CHECK(std::isfinite(light.view_projection[c][r]), "penumbra::sampleListsParams: light view_projection[",
+                           c, "][", r, "] = ", light.view_projection[c][r], " is not finite");
+        }
+    }
+    const glm::vec4& l = light.light;
+    PENUMBRA_CHECK(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z),
+                   "penumbra::sampleListsParams: light (", l.x, ", ", l.y, ", ", l.z, ") is not finite");
+    PENUMBRA_CHECK(l.w == 0.0f || l.w == 1.0f, "penumbra::sampleListsParams: light.w = ", l.w,
+                   " must be 1 (point light) or 0 (directional light)");
+    PENUMBRA_CHECK(l.w == 1.0f || l.x != 0.0f || l.y != 0.0f || l.z != 0.0f,
+                   "penumbra::sampleListsParams: directional light direction (0, 0, 0) is zero");
+    PENUMBRA_CHECK(setup.lists != 0, "penumbra::sampleListsParams: setup is empty (use sampleListsSetup)");
+    SampleListsParams p{};
+    p.light_texture = lightTextureMatrix(light.view_projection, options.depth_range);
+    p.view_inverse = glm::mat4(1.0f);
+    p.light = l;
+    uint32_t flags = 0;
+    if (options.cull_back_facing) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CULL_BACK_FACING;
+    if (options.depth_range != LightDepthRange::Unclipped) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CLIP_DEPTH;
+    if (view) {
+        PENUMBRA_CHECK(view->width >= 1 && view->height >= 1, "penumbra::sampleListsParams: view size ", view->width,
+                       " x ", view->height, " is empty");
+        PENUMBRA_CHECK(uint64_t(view->width) * view->height == setup.sample_count, "penumbra::sampleListsParams: view ",
+                       view->width, " x ", view->height, " does not match the setup's sample count ",
+                       setup.sample_count);
+        for (int c = 0; c < 4; ++c) {
+            for (int r = 0; r < 4; ++r) {
+                PENUMBRA_CHECK(std::isfinite(view->inverse_view_projection[c][r]),
+                               "penumbra::sampleListsParams: view inverse_view_projection[", c, "][", r, "] = ",
+                               view->inverse_view_projection[c][r], " is not finite");
+            }
+        }
+        p.view_inverse = view->inverse_view_projection;
+        p.view = glm::uvec4(view->width, view->height, 0u, 0u);
+        if (view->depth_zero_to_one) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_VIEW_DEPTH_ZERO_TO_ONE;
+    }
+    p.grid = glm::uvec4(setup.grid_width, setup.grid_height, setup.sample_count, flags);
+    return p;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Packed shadow bits (§3.1 Storage, §4.2): sizing and addressing, twin of shadow_bits.glsl
+
+/// Bits each slot owns: N rounded up to a power of two for N <= 16 (no slot straddles a word),
+/// to a multiple of 32 for N > 16 (word-aligned slots). Throws for N == 0 or N > 65536.
+inline uint32_t shadowStrideBits(uint32_t bits_per_sample) {
+    PENUMBRA_CHECK(bits_per_sample >= 1 && bits_per_sample <= kSampleListsMaxShadowBits,
+                   "penumbra::shadowStrideBits: bits per sample ", bits_per_sample, " is outside [1, ",
+                   kSampleListsMaxShadowBits, "]");
+    if (bits_per_sample > 16) return (bits_per_sample + 31) / 32 * 32;
+    uint32_t stride = 1;
+    while (stride < bits_per_sample) stride *= 2;
+    return stride;
+}
+
+/// uint words for `slots` slots of `bits_per_sample` bits. Throws when a word index would not
+/// fit 32 bits (the GLSL addresses words with uint).
+inline uint64_t shadowBitsWords(uint64_t slots, uint32_t bits_per_sample) {
+    const uint64_t stride = shadowStrideBits(bits_per_sample);
+    const uint64_t words = detail::divUp(slots * stride, 32);
+    PENUMBRA_CHECK(slots <= kSampleListsMaxSamples && words <= 0x100000000ull, "penumbra::shadowBitsWords: ", slots,
+                   " slots x ", stride, " bits need ", words, " words, more than 32-bit indices address");
+    return words;
+}
+
+inline size_t shadowBitsBytes(uint64_t slots, uint32_t bits_per_sample) {
+    return static_cast<size_t>(shadowBitsWords(slots, bits_per_sample) * 4);
+}
+
+struct ShadowBitAddress {
+    uint64_t word = 0;  ///< index into the uint array
+    uint32_t bit = 0;   ///< bit inside that word
+};
+
+/// Where bit `bit` (< bits_per_sample) of `slot` lives; same as penumbraSampleListsShadowAddress.
+inline ShadowBitAddress shadowBitAddress(uint32_t slot, uint32_t bit, uint32_t bits_per_sample) {
+    const uint32_t stride = shadowStrideBits(bits_per_sample);
+    PENUMBRA_ASSERT(bit < stride);
+    if (stride >= 32) return {uint64_t(slot) * (stride / 32) + (bit >> 5), bit & 31u};
+    const uint32_t per_word = 32 / stride;
+    return {slot / per_word, (slot % per_word) * stride + bit};
+}
+
+// ---------------------------------------------------------------------------------------------
+// CPU twin of project.glsl
+
+namespace detail {
+
+inline uint32_t floatBits(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    return bits;
+}
+
+inline float floatFromBits(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+
+/// NaN or Inf, on the bits (twin of penumbraSampleListsNonFinite).
+inline bool nonFinite(float f) { return (floatBits(f) & 0x7F800000u) == 0x7F800000u; }
+
+/// Order-preserving key (twin of penumbraSampleListsOrderKey): a < b <=> key(a) < key(b).
+inline uint32_t orderKey(float f) {
+    const uint32_t bits = floatBits(f);
+    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+}
+
+inline float orderKeyValue(uint32_t key) {
+    return floatFromBits((key & 0x80000000u) ? (key & 0x7FFFFFFFu) : ~key);
+}
+
+/// a * b rounded to float and kept opaque, so the compiler cannot contract it with a following
+/// add into an FMA (GCC contracts across statements with -mfma / -march=native); the GLSL side
+/// uses `precise` for the same reason.
+inline float mulRounded(float a, float b) {
+    float r = a * b;
+#if defined(__GNUC__) && defined(__x86_64__)
+    __asm__("" : "+x"(r));
+#elif defined(__GNUC__) && defined(__aarch64__)
+    __asm__("" : "+w"(r));
+#endif
+    return r;
+}
+
+/// m * (x, y, z, 1) as ((m0 x + m1 y) + m2 z) + m3 (twin of penumbraSampleListsTransform).
+inline glm::vec4 transformPoint(const glm::mat4& m, float x, float y, float z) {
+    glm::vec4 c;
+    for (int r = 0; r < 4; ++r) {
+        float v = mulRounded(m[0][r], x);
+        v = v + mulRounded(m[1][r], y);
+        v = v + mulRounded(m[2][r], z);
+        v = v + m[3][r];
+        c[r] = v;
+    }
+    return c;
+}
+
+/// Twin of penumbraSampleListsViewPosition.
+inline glm::vec4 viewPosition(const glm::mat4& view_inverse, uint32_t px, uint32_t py, uint32_t width, uint32_t height,
+                              float depth, bool depth_zero_to_one) {
+    if (depth == 1.0f) return glm::vec4(0.0f);
+    const float x = mulRounded((static_cast<float>(px) + 0.5f) / static_cast<float>(width), 2.0f) - 1.0f;
+    const float y = mulRounded((static_cast<float>(py) + 0.5f) / static_cast<float>(height), 2.0f) - 1.0f;
+    const float z = depth_zero_to_one ? depth : mulRounded(depth, 2.0f) - 1.0f;
+    glm::vec4 h;
+    for (int r = 0; r < 4; ++r) {
+        float v = mulRounded(view_inverse[0][r], x);
+        v = v + mulRounded(view_inverse[1][r], y);
+        v = v + mulRounded(view_inverse[2][r], z);
+        v = v + view_inverse[3][r];
+        h[r] = v;
+    }
+    return glm::vec4(h.x / h.w, h.y / h.w, h.z / h.w, 1.0f);
+}
+
+/// Twin of penumbraSampleListsClassify: the list index, or kSampleListsRejected + reason.
+inline uint32_t classifySample(const SampleListsParams& params, const glm::vec4& position, const glm::vec3& normal,
+                               glm::vec4* t_out = nullptr) {
+    if (t_out) *t_out = glm::vec4(0.0f);
+    if (position.w == 0.0f) return kSampleListsRejected + PENUMBRA_SAMPLE_LISTS_REASON_BACKGROUND;
+    const uint32_t flags = params.grid.w;
+    const bool cull = (flags & PENUMBRA_SAMPLE_LISTS_FLAG_CULL_BACK_FACING) != 0;
+    if (nonFinite(position.x) || nonFinite(position.y) || nonFinite(position.z) ||
+        (cull && (nonFinite(normal.x) || nonFinite(normal.y) || nonFinite(normal.z)))) {
+        return kSampleListsRejected + PENUMBRA_SAMPLE_LISTS_REASON_NON_FINITE;
+    }
+    const glm::vec4 t = transformPoint(params.light_texture, position.x, position.y, position.z);
+    if (t_out) *t_out = t;
+    if (nonFinite(t.x) || nonFinite(t.y) || nonFinite(t.z) || nonFinite(t.w) || !(t.w > 0.0f) ||
+        !(t.x >= 0.0f && t.x <= t.w) || !(t.y >= 0.0f && t.y <= t.w)) {
+        return kSampleListsRejected + PENUMBRA_SAMPLE_LISTS_REASON_OUTSIDE;
+    }
+    if ((flags & PENUMBRA_SAMPLE_LISTS_FLAG_CLIP_DEPTH) && !(t.z >= 0.0f && t.z <= t.w)) {
+        return kSampleListsRejected + PENUMBRA_SAMPLE_LISTS_REASON_DEPTH;
+    }
+    if (cull) {
+        const glm::vec4& l = params.light;
+        const float lx = l.w == 0.0f ? l.x : l.x - position.x;
+        const float ly = l.w == 0.0f ? l.y : l.y - position.y;
+        const float lz = l.w == 0.0f ? l.z : l.z - position.z;
+        float facing = mulRounded(normal.x, lx) + mulRounded(normal.y, ly);
+        facing = facing + mulRounded(normal.z, lz);
+        if (!(facing > 0.0f)) return kSampleListsRejected + PENUMBRA_SAMPLE_LISTS_REASON_BACK_FACING;
+    }
+    const float gx = (t.x / t.w) * static_cast<float>(params.grid.x);
+    const float gy = (t.y / t.w) * static_cast<float>(params.grid.y);
+    const uint32_t x = std::min(static_cast<uint32_t>(std::floor(gx)), params.grid.x - 1);
+    const uint32_t y = std::min(static_cast<uint32_t>(std::floor(gy)), params.grid.y - 1);
+    return y * params.grid.x + x;
+}
+
+}  // namespace detail
+
+// ---------------------------------------------------------------------------------------------
+// The structure, as the CPU twin builds it and as downloadSampleLists reads it back
+
+struct SampleListsCpu {
+    uint32_t grid_width = 0, grid_height = 0;
+    std::vector<uint32_t> counts;             ///< [W*H] list lengths
+    std::vector<uint32_t> offsets;            ///< [W*H] exclusive scan of counts
+    std::vector<glm::vec4> list_positions;    ///< [accepted] by slot, w = 1
+    std::vector<uint32_t> list_ids;           ///< [accepted] by slot
+    std::vector<uint32_t> sample_slots;       ///< [samples] slot or kSampleListsNoSlot
+    std::vector<uint32_t> sample_texels;      ///< [samples] list index or kSampleListsRejected + reason
+    SampleListsHeader header{};               ///< accepted and rejected[] (fit / statistics words 0)
+};
+
+namespace detail {
+
+// Counting sort (§3.1 with a sequential counter): local index = running count of the texel in
+// sample-id order, offsets = exclusive scan (the scan block's CPU twin), slot = offset + index.
+template <typename Source>
+SampleListsCpu buildSampleListsCpu(const SampleListsSetup& setup, const SampleListsParams& params, Source&& source) {
+    SampleListsCpu out;
+    out.grid_width = setup.grid_width;
+    out.grid_height = setup.grid_height;
+    const uint32_t n = setup.sample_count;
+    out.counts.assign(setup.lists, 0u);
+    out.offsets.assign(setup.lists, 0u);
+    out.sample_slots.assign(n, kSampleListsNoSlot);
+    out.sample_texels.assign(n, 0u);
+    std::vector<glm::vec4> accepted_positions;
+    for (uint32_t id = 0; id < n; ++id) {
+        glm::vec4 position;
+        glm::vec3 normal;
+        source(id, position, normal);
+        const uint32_t code = classifySample(params, position, normal);
+        out.sample_texels[id] = code;
+        if (code < kSampleListsRejected) {
+            out.sample_slots[id] = out.counts[code]++;
+            ++out.header.accepted;
+        } else {
+            ++out.header.rejected[code - kSampleListsRejected];
+        }
+    }
+    scanCpu(out.counts.data(), out.offsets.data(), out.counts.size(), ScanKind::Exclusive);
+    out.list_positions.assign(out.header.accepted, glm::vec4(0.0f));
+    out.list_ids.assign(out.header.accepted, 0u);
+    for (uint32_t id = 0; id < n; ++id) {
+        const uint32_t code = out.sample_texels[id];
+        if (code >= kSampleListsRejected) continue;
+        glm::vec4 position;
+        glm::vec3 normal;
+        source(id, position, normal);
+        const uint32_t slot = out.offsets[code] + out.sample_slots[id];
+        out.sample_slots[id] = slot;
+        out.list_positions[slot] = glm::vec4(position.x, position.y, position.z, 1.0f);
+        out.list_ids[slot] = id;
+    }
+    return out;
+}
+
+inline void checkCpuNormals(const void* normals, const SampleListsOptions& options, uint32_t n, const char* function) {
+    PENUMBRA_CHECK(normals || !options.cull_back_facing || n == 0, "penumbra::", function,
+                   ": normals is null but cull_back_facing is on");
+}
+
+}  // namespace detail
+
+/// CPU twin, buffer input: positions[sample_count] (w == 0: no sample), normals[sample_count]
+/// (xyz; may be null when options.cull_back_facing is false). Lists ordered by sample id.
+inline SampleListsCpu buildSampleListsCpu(const SampleListsSetup& setup, const SampleListsLight& light,
+                                          const glm::vec4* positions, const glm::vec4* normals,
+                                          const SampleListsOptions& options = {}) {
+    PENUMBRA_CHECK(positions || setup.sample_count == 0, "penumbra::buildSampleListsCpu: positions is null");
+    detail::checkCpuNormals(normals, options, setup.sample_count, "buildSampleListsCpu");
+    const SampleListsParams params = sampleListsParams(setup, light, options);
+    const bool cull = options.cull_back_facing;
+    return detail::buildSampleListsCpu(setup, params, [&](uint32_t id, glm::vec4& p, glm::vec3& n) {
+        p = positions[id];
+        n = cull ? glm::vec3(normals[id]) : glm::vec3(0.0f);
+    });
+}
+
+/// CPU twin, depth input: depth[y * width + x] window depths (row 0 = bottom, as GL textures),
+/// normals[y * width + x] (xyz; may be null when culling is off).
+inline SampleListsCpu buildSampleListsCpu(const SampleListsSetup& setup, const SampleListsLight& light,
+                                          const SampleListsView& view, const float* depth, const glm::vec4* normals,
+                                          const SampleListsOptions& options = {}) {
+    PENUMBRA_CHECK(depth || setup.sample_count == 0, "penumbra::buildSampleListsCpu: depth is null");
+    detail::checkCpuNormals(normals, options, setup.sample_count, "buildSampleListsCpu");
+    const SampleListsParams params = sampleListsParams(setup, light, options, &view);
+    const bool cull = options.cull_back_facing;
+    return detail::buildSampleListsCpu(setup, params, [&](uint32_t id, glm::vec4& p, glm::vec3& n) {
+        const uint32_t x = id % view.width, y = id / view.width;
+        p = detail::viewPosition(params.view_inverse, x, y, view.width, view.height, depth[id], view.depth_zero_to_one);
+        n = cull ? glm::vec3(normals[id]) : glm::vec3(0.0f);
+    });
+}
+
+/// "" when the two structures are equal modulo the order inside each list (see "Rules"), else
+/// the first difference found.
+inline std::string sampleListsDifference(const SampleListsCpu& a, const SampleListsCpu& b) {
+    auto say = [](auto&&... parts) {
+        std::ostringstream out;
+        (out << ... << parts);
+        return out.str();
+    };
+    if (a.grid_width != b.grid_width || a.grid_height != b.grid_height) {
+        return say("grid ", a.grid_width, "x", a.grid_height, " vs ", b.grid_width, "x", b.grid_height);
+    }
+    if (a.header.accepted != b.header.accepted) return say("accepted ", a.header.accepted, " vs ", b.header.accepted);
+    for (uint32_t r = 0; r < 8; ++r) {
+        if (a.header.rejected[r] != b.header.rejected[r]) {
+            return say("rejected[", r, "] ", a.header.rejected[r], " vs ", b.header.rejected[r]);
+        }
+    }
+    const size_t lists = size_t(a.grid_width) * a.grid_height;
+    if (a.counts.size() != lists || b.counts.size() != lists || a.offsets.size() != lists || b.offsets.size() != lists) {
+        return "counts/offsets sizes differ from W*H";
+    }
+    for (size_t i = 0; i < lists; ++i) {
+        if (a.counts[i] != b.counts[i]) return say("counts[", i, "] ", a.counts[i], " vs ", b.counts[i]);
+        if (a.offsets[i] != b.offsets[i]) return say("offsets[", i, "] ", a.offsets[i], " vs ", b.offsets[i]);
+    }
+    if (a.sample_texels != b.sample_texels) {
+        for (size_t id = 0; id < std::min(a.sample_texels.size(), b.sample_texels.size()); ++id) {
+            if (a.sample_texels[id] != b.sample_texels[id]) {
+                return say("sample_texels[", id, "] ", a.sample_texels[id], " vs ", b.sample_texels[id]);
+            }
+        }
+        return say("sample_texels sizes ", a.sample_texels.size(), " vs ", b.sample_texels.size());
+    }
+    const size_t accepted = a.header.accepted;
+    for (const SampleListsCpu* s : {&a, &b}) {
+        if (s->list_positions.size() < accepted || s->list_ids.size() < accepted ||
+            s->sample_slots.size() != s->sample_texels.size()) {
+            return "list arrays shorter than the accepted count";
+        }
+    }
+    // Same set of (id, position bits) per list.
+    using Entry = std::array<uint32_t, 5>;
+    std::vector<Entry> ea, eb;
+    for (size_t i = 0; i < lists; ++i) {
+        ea.clear();
+        eb.clear();
+        for (uint32_t k = 0; k < a.counts[i]; ++k) {
+            const size_t slot = size_t(a.offsets[i]) + k;
+            if (slot >= accepted) return say("list ", i, " runs past the accepted count");
+            const glm::vec4& pa = a.list_positions[slot];
+            const glm::vec4& pb = b.list_positions[slot];
+            ea.push_back({a.list_ids[slot], detail::floatBits(pa.x), detail::floatBits(pa.y), detail::floatBits(pa.z),
+                          detail::floatBits(pa.w)});
+            eb.push_back({b.list_ids[slot], detail::floatBits(pb.x), detail::floatBits(pb.y), detail::floatBits(pb.z),
+                          detail::floatBits(pb.w)});
+        }
+        std::sort(ea.begin(), ea.end());
+        std::sort(eb.begin(), eb.end());
+        if (ea != eb) return say("list ", i, " holds different (id, position) sets");
+    }
+    // Every sample's slot points at its own id, inside its own list.
+    for (const SampleListsCpu* s : {&a, &b}) {
+        const char* which = s == &a ? "first" : "second";
+        for (size_t id = 0; id < s->sample_slots.size(); ++id) {
+            const uint32_t code = s->sample_texels[id], slot = s->sample_slots[id];
+            if (code >= kSampleListsRejected) {
+                if (slot != kSampleListsNoSlot) return say(which, ": rejected sample ", id, " has slot ", slot);
+                continue;
+            }
+            if (slot < s->offsets[code] || slot - s->offsets[code] >= s->counts[code] || s->list_ids[slot] != id) {
+                return say(which, ": sample ", id, " slot ", slot, " does not point at it inside list ", code);
+            }
+        }
+    }
+    return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// §4.3 light-frustum fitting
+
+/// Value-initialised = defaults.
+struct LightFrustumFitOptions {
+    float margin = 1e-3f;      ///< added on every side, as a fraction of the box size
+    float min_margin = 1e-4f;  ///< at least this much (light-texture units of the original frustum):
+                               ///< covers float rounding and a degenerate (single-point) box
+    bool fit_far = true;       ///< move the far plane to the farthest sample (+ margin); never beyond the original
+};
+
+struct LightFrustumFit {
+    bool valid = false;         ///< false: no sample qualified; crop = identity, view_projection unchanged
+    uint32_t samples = 0;       ///< samples that entered the fit (those the build would accept)
+    glm::vec2 min_uv{0.0f}, max_uv{0.0f};  ///< box of the samples in the original light texture [0, 1]^2
+    float max_depth = 0.0f;     ///< largest light-texture depth z / w of the samples
+    float far_distance = 0.0f;  ///< §4.3 farthest sample: point light = distance to it; directional =
+                                ///< largest -dot(p, d) for the unit direction d towards the light
+    glm::mat4 crop{1.0f};       ///< NDC crop: box + margin -> [-1, 1]^2, [near, max depth + margin] -> [near, far]
+    glm::mat4 view_projection{1.0f};  ///< crop * original light view-projection
+    SampleListsHeader keys{};   ///< the reduced keys it was computed from (fit_* words)
+};
+
+/// Turns the reduced fit keys (GPU header or CPU twin) into the fit; pure, so both sides give
+/// bit-identical matrices from identical keys.
+inline LightFrustumFit lightFrustumFitFromHeader(const SampleListsHeader& header, const SampleListsLight& light,
+                                                 const SampleListsOptions& options = {},
+                                                 const LightFrustumFitOptions& fit = {}) {
+    PENUMBRA_CHECK(std::isfinite(fit.margin) && fit.margin >= 0.0f && std::isfinite(fit.min_margin) &&
+                       fit.min_margin > 0.0f,
+                   "penumbra::lightFrustumFitFromHeader: margin ", fit.margin, " / min_margin ", fit.min_margin,
+                   " must be finite, margin >= 0 and min_margin > 0");
+    LightFrustumFit out;
+    out.keys = header;
+    out.samples = header.fit_samples;
+    out.view_projection = light.view_projection;
+    if (header.fit_samples == 0) return out;
+    out.valid = true;
+    const float u0 = detail::orderKeyValue(header.fit_min_u), v0 = detail::orderKeyValue(header.fit_min_v);
+    const float u1 = detail::orderKeyValue(header.fit_max_u), v1 = detail::orderKeyValue(header.fit_max_v);
+    out.min_uv = glm::vec2(u0, v0);
+    out.max_uv = glm::vec2(u1, v1);
+    out.max_depth = detail::orderKeyValue(header.fit_max_depth);
+    const float distance_key = detail::orderKeyValue(header.fit_max_distance);
+    if (light.light.w == 0.0f) {
+        out.far_distance = static_cast<float>(distance_key / glm::length(glm::dvec3(light.light)));
+    } else {
+        out.far_distance = static_cast<float>(std::sqrt(static_cast<double>(distance_key)));
+    }
+    // Box in light-texture units, widened by the margin; NDC X = 2u - 1 maps [U0, U1] to [-1, 1]
+    // with X' = X / (U1 - U0) + (1 - U0 - U1) / (U1 - U0).
+    auto widen = [&](double lo, double hi, double& out_lo, double& out_hi) {
+        const double m = std::max(double(fit.margin) * (hi - lo), double(fit.min_margin));
+        out_lo = lo - m;
+        out_hi = hi + m;
+    };
+    double U0, U1, V0, V1;
+    widen(u0, u1, U0, U1);
+    widen(v0, v1, V0, V1);
+    glm::dmat4 crop(1.0);
+    crop[0][0] = 1.0 / (U1 - U0);
+    crop[3][0] = (1.0 - U0 - U1) / (U1 - U0);
+    crop[1][1] = 1.0 / (V1 - V0);
+    crop[3][1] = (1.0 - V0 - V1) / (V1 - V0);
+    // Far plane: light depth z' = z / Z (Z = max depth + margin, < 1) keeps the near plane; in
+    // clip space z' = z / Z (ZeroToOne) or z' = z / Z + (1 / Z - 1) w (MinusOneToOne).
+    if (fit.fit_far && options.depth_range != LightDepthRange::Unclipped) {
+        const double zmax = out.max_depth;
+        const double Z = zmax + std::max(double(fit.margin) * zmax, double(fit.min_margin));
+        if (Z < 1.0 && Z > 0.0) {
+            crop[2][2] = 1.0 / Z;
+            if (options.depth_range == LightDepthRange::MinusOneToOne) crop[3][2] = 1.0 / Z - 1.0;
+        }
+    }
+    out.crop = glm::mat4(crop);
+    out.view_projection = glm::mat4(crop * glm::dmat4(light.view_projection));
+    return out;
+}
+
+namespace detail {
+
+// The fit keys of one accepted sample merged into `h` (twin of fit.comp.glsl).
+inline void mergeFitSample(SampleListsHeader& h, const glm::vec4& light, const glm::vec4& p, const glm::vec4& t) {
+    const float u = t.x / t.w, v = t.y / t.w, depth = t.z / t.w;
+    float distance;
+    if (light.w == 0.0f) {
+        float along = mulRounded(p.x, light.x) + mulRounded(p.y, light.y);
+        along = along + mulRounded(p.z, light.z);
+        distance = -along;
+    } else {
+        const float dx = p.x - light.x, dy = p.y - light.y, dz = p.z - light.z;
+        const float squared = mulRounded(dx, dx) + mulRounded(dy, dy);
+        distance = squared + mulRounded(dz, dz);
+    }
+    h.fit_min_u = std::min(h.fit_min_u, orderKey(u));
+    h.fit_min_v = std::min(h.fit_min_v, orderKey(v));
+    h.fit_max_u = std::max(h.fit_max_u, orderKey(u));
+    h.fit_max_v = std::max(h.fit_max_v, orderKey(v));
+    h.fit_max_depth = std::max(h.fit_max_depth, orderKey(depth));
+    h.fit_max_distance = std::max(h.fit_max_distance, orderKey(distance));
+    ++h.fit_samples;
+}
+
+inline SampleListsHeader emptyFitHeader() {
+    SampleListsHeader h{};
+    h.fit_min_u = h.fit_min_v = 0xFFFFFFFFu;
+    return h;
+}
+
+template <typename Source>
+SampleListsHeader fitKeysCpu(const SampleListsSetup& setup, const SampleListsParams& params, Source&& source) {
+    SampleListsHeader h = emptyFitHeader();
+    for (uint32_t id = 0; id < setup.sample_count; ++id) {
+        glm::vec4 position, t;
+        glm::vec3 normal;
+        source(id, position, normal);
+        if (classifySample(params, position, normal, &t) < kSampleListsRejected) {
+            mergeFitSample(h, params.light, position, t);
+        }
+    }
+    return h;
+}
+
+}  // namespace detail
+
+/// CPU twin of the §4.3 fit, buffer input (arguments as buildSampleListsCpu).
+inline LightFrustumFit fitLightFrustumCpu(const SampleListsSetup& setup, const SampleListsLight& light,
+                                          const glm::vec4* positions, const glm::vec4* normals,
+                                          const SampleListsOptions& options = {},
+                                          const LightFrustumFitOptions& fit = {}) {
+    PENUMBRA_CHECK(positions || setup.sample_count == 0, "penumbra::fitLightFrustumCpu: positions is null");
+    detail::checkCpuNormals(normals, options, setup.sample_count, "fitLightFrustumCpu");
+    const SampleListsParams params = sampleListsParams(setup, light, options);
+    const bool cull = options.cull_back_facing;
+    const SampleListsHeader keys = detail::fitKeysCpu(setup, params, [&](uint32_t id, glm::vec4& p, glm::vec3& n) {
+        p = positions[id];
+        n = cull ? glm::vec3(normals[id]) : glm::vec3(0.0f);
+    });
+    return lightFrustumFitFromHeader(keys, light, options, fit);
+}
+
+/// CPU twin of the §4.3 fit, depth input.
+inline LightFrustumFit fitLightFrustumCpu(const SampleListsSetup& setup, const SampleListsLight& light,
+                                          const SampleListsView& view, const float* depth, const glm::vec4* normals,
+                                          const SampleListsOptions& options = {},
+                                          const LightFrustumFitOptions& fit = {}) {
+    PENUMBRA_CHECK(depth || setup.sample_count == 0, "penumbra::fitLightFrustumCpu: depth is null");
+    detail::checkCpuNormals(normals, options, setup.sample_count, "fitLightFrustumCpu");
+    const SampleListsParams params = sampleListsParams(setup, light, options, &view);
+    const bool cull = options.cull_back_facing;
+    const SampleListsHeader keys = detail::fitKeysCpu(setup, params, [&](uint32_t id, glm::vec4& p, glm::vec3& n) {
+        p = detail::viewPosition(params.view_inverse, id % view.width, id / view.width, view.width, view.height,
+                                 depth[id], view.depth_zero_to_one);
+        n = cull ? glm::vec3(normals[id]) : glm::vec3(0.0f);
+    });
+    return lightFrustumFitFromHeader(keys, light, options, fit);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fig. 9 statistics
+
+struct SampleListStatistics {
+    uint32_t lists = 0;            ///< W * H
+    uint32_t occupied_lists = 0;   ///< lists with at least one sample
+    uint32_t max_list_length = 0;
+    uint64_t listed_samples = 0;   ///< sum of list lengths (== accepted)
+    uint32_t accepted = 0;
+    std::array<uint32_t, kSampleListsReasonCount> rejected{};  ///< by SampleRejection
+
+    /// Fraction of lists with at least one sample (Fig. 9 "% of occupied lists" / 100).
+    double occupancy() const { return lists ? double(occupied_lists) / lists : 0.0; }
+    /// Fig. 9 "Av. occup. list size": average over occupied lists.
+    double averageOccupiedLength() const { return occupied_lists ? double(listed_samples) / occupied_lists : 0.0; }
+    /// Average over all lists.
+    double averageLength() const { return lists ? double(listed_samples) / lists : 0.0; }
+    uint64_t rejectedTotal() const {
+        uint64_t total = 0;
+        for (uint32_t r : rejected) total += r;
+        return total;
+    }
+    bool operator==(const SampleListStatistics& o) const {
+        return lists == o.lists && occupied_lists == o.occupied_lists && max_list_length == o.max_list_length &&
+               listed_samples == o.listed_samples && accepted == o.accepted && rejected == o.rejected;
+    }
+    bool operator!=(const SampleListStatistics& o) const { return !(*this == o); }
+};
+
+/// From a header the GPU filled (count pass + statistics pass).
+inline SampleListStatistics sampleListStatisticsFromHeader(const SampleListsSetup& setup,
+                                                           const SampleListsHeader& header) {
+    SampleListStatistics s;
+    s.lists = setup.lists;
+    s.occupied_lists = header.occupied_lists;
+    s.max_list_length = header.max_list_length;
+    s.listed_samples = header.listed_samples;
+    s.accepted = header.accepted;
+    for (uint32_t r = 0; r < kSampleListsReasonCount; ++r) s.rejected[r] = header.rejected[r];
+    return s;
+}
+
+/// CPU twin: from the structure's counts and counters.
+inline SampleListStatistics sampleListStatisticsCpu(const SampleListsCpu& lists) {
+    SampleListStatistics s;
+    s.lists = static_cast<uint32_t>(lists.counts.size());
+    for (uint32_t c : lists.counts) {
+        if (c == 0) continue;
+        ++s.occupied_lists;
+        s.max_list_length = std::max(s.max_list_length, c);
+        s.listed_samples += c;
+    }
+    s.accepted = lists.header.accepted;
+    for (uint32_t r = 0; r < kSampleListsReasonCount; ++r) s.rejected[r] = lists.header.rejected[r];
+    return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// GL execution
+
+/// View samples from buffers the caller owns.
+struct SampleBufferInput {
+    GLuint positions = 0;  ///< vec4[sample_count]: xyz world position; w == 0 = no sample
+    GLuint normals = 0;    ///< vec4[sample_count]: xyz world normal; 0 allowed when culling is off
+};
+
+/// View samples from the view's depth buffer (GL_TEXTURE_2D objects the caller owns).
+struct SampleDepthInput {
+    GLuint depth_texture = 0;   ///< window depth at level 0 (1.0 = background)
+    GLuint normal_texture = 0;  ///< xyz world normal at level 0; 0 allowed when culling is off
+    SampleListsView view;
+};
+
+/// The buffers a build writes (sizes: SampleListsSetup::*_bytes; a buffer whose size is 0 may be 0).
+struct SampleListsBuffers {
+    GLuint counts = 0;          ///< uint[W*H]
+    GLuint offsets = 0;         ///< uint[W*H]
+    GLuint list_positions = 0;  ///< vec4[sample_count]
+    GLuint list_ids = 0;        ///< uint[sample_count]
+    GLuint sample_slots = 0;    ///< uint[sample_count]
+    GLuint sample_texels = 0;   ///< uint[sample_count]
+    GLuint header = 0;          ///< SampleListsHeader
+};
+
+namespace detail {
+
+inline void requireBuffer(GLuint id, size_t bytes, const char* what, const char* function) {
+    if (bytes == 0) return;
+    PENUMBRA_CHECK(id != 0 && glIsBuffer(id), "penumbra::", function, ": ", what, " (", id,
+                   ") is not a buffer object; it must hold ", bytes, " bytes");
+    GLint64 size = 0;
+    glGetNamedBufferParameteri64v(id, GL_BUFFER_SIZE, &size);
+    PENUMBRA_CHECK(size >= 0 && static_cast<uint64_t>(size) >= bytes, "penumbra::", function, ": ", what,
+                   " buffer (", id, ") holds ", size, " bytes, needs ", bytes);
+}
+
+inline void requireTexture(GLuint id, const SampleListsView& view, const char* what, const char* function) {
+    PENUMBRA_CHECK(id != 0 && glIsTexture(id), "penumbra::", function, ": ", what, " (", id,
+                   ") is not a texture object");
+    GLint target = 0, width = 0, height = 0, compare = GL_NONE;
+    glGetTextureParameteriv(id, GL_TEXTURE_TARGET, &target);
+    PENUMBRA_CHECK(target == GL_TEXTURE_2D, "penumbra::", function, ": ", what, " (", id, ") is not a GL_TEXTURE_2D");
+    glGetTextureLevelParameteriv(id, 0, GL_TEXTURE_WIDTH, &width);
+    glGetTextureLevelParameteriv(id, 0, GL_TEXTURE_HEIGHT, &height);
+    PENUMBRA_CHECK(width >= 0 && height >= 0 && uint32_t(width) >= view.width && uint32_t(height) >= view.height,
+                   "penumbra::", function, ": ", what, " (", id, ") is ", width, " x ", height, ", the view is ",
+                   view.width, " x ", view.height);
+    glGetTextureParameteriv(id, GL_TEXTURE_COMPARE_MODE, &compare);
+    PENUMBRA_CHECK(compare == GL_NONE, "penumbra::", function, ": ", what, " (", id,
+                   ") has GL_TEXTURE_COMPARE_MODE on; texelFetch needs GL_NONE");
+}
+
+inline void clearWords(GLuint buffer, uint32_t first_word, uint32_t words, uint32_t value) {
+    if (words == 0) return;
+    glClearNamedBufferSubData(buffer, GL_R32UI, GLintptr(first_word) * 4, GLsizeiptr(words) * 4, GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &value);
+}
+
+inline void dispatch(const DispatchGrid& grid) {
+    if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
+}
+
+}  // namespace detail
+
+/// Builds the lists on the GPU. Owns its programs (compiled on first use, per input kind), a
+/// 176-byte uniform buffer and the Scanner; movable, not copyable. Needs a current GL context
+/// for every call; `library` must outlive the builder.
+class SampleListBuilder {
+public:
+    explicit SampleListBuilder(const ShaderLibrary& library = ShaderLibrary::embedded(), const ScanOptions& scan = {})
+        : library_(&library), scan_options_(scan) {}
+
+    /// Bytes of GPU scratch the builder holds for grids of this size (the Scanner's), beyond
+    /// the caller's buffers and the 176-byte uniform block.
+    size_t scratchBytes(const SampleListsSetup& setup) { return scanner().scratchBytes(setup.lists); }
+
+    /// Load-time preparation: compiles every kernel (both inputs) and grows the Scanner's scratch
+    /// for `setup`, so later builds of this size compile and allocate nothing.
+    void reserve(const SampleListsSetup& setup) {
+        for (int kernel = 0; kernel < kKernels; ++kernel) {
+            for (int input = 0; input < (kernel == kStatistics ? 1 : 2); ++input) program(Kernel(kernel), input);
+        }
+        scanner().reserve(setup.lists);
+        if (!params_.id()) params_ = gl::Buffer(sizeof(SampleListsParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        gl::checkErrors("penumbra::SampleListBuilder::reserve");
+    }
+
+    /// Passes 1-3 for buffer input. Throws penumbra::Error naming a missing or too-small buffer.
+    void build(const SampleListsSetup& setup, const SampleListsLight& light, const SampleBufferInput& input,
+               const SampleListsBuffers& out, const SampleListsOptions& options = {}) {
+        checkBufferInput(setup, input, options, "SampleListBuilder::build");
+        checkOutputs(setup, out);
+        run(setup, sampleListsParams(setup, light, options), PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER,
+            [&] { bindBufferInput(input, options); }, out);
+    }
+
+    /// Passes 1-3 for depth input (sample count = view width * height).
+    void build(const SampleListsSetup& setup, const SampleListsLight& light, const SampleDepthInput& input,
+               const SampleListsBuffers& out, const SampleListsOptions& options = {}) {
+        const SampleListsParams params = sampleListsParams(setup, light, options, &input.view);
+        checkDepthInput(input, options, "SampleListBuilder::build");
+        checkOutputs(setup, out);
+        run(setup, params, PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH, [&] { bindDepthInput(input, options); }, out);
+    }
+
+    /// §4.3: reduces the fit keys into `header` (fit words only) without reading them back.
+    void dispatchFit(const SampleListsSetup& setup, const SampleListsLight& light, const SampleBufferInput& input,
+                     GLuint header, const SampleListsOptions& options = {}) {
+        checkBufferInput(setup, input, options, "SampleListBuilder::dispatchFit");
+        detail::requireBuffer(header, setup.header_bytes, "header", "SampleListBuilder::dispatchFit");
+        runFit(setup, sampleListsParams(setup, light, options), PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER,
+               [&] { bindBufferInput(input, options); }, header);
+    }
+    void dispatchFit(const SampleListsSetup& setup, const SampleListsLight& light, const SampleDepthInput& input,
+                     GLuint header, const SampleListsOptions& options = {}) {
+        const SampleListsParams params = sampleListsParams(setup, light, options, &input.view);
+        checkDepthInput(input, options, "SampleListBuilder::dispatchFit");
+        detail::requireBuffer(header, setup.header_bytes, "header", "SampleListBuilder::dispatchFit");
+        runFit(setup, params, PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH, [&] { bindDepthInput(input, options); }, header);
+    }
+
+    /// §4.3 fit: dispatch, read back (waits for the GPU), turn keys into the crop matrix.
+    template <typename Input>
+    LightFrustumFit fitLightFrustum(const SampleListsSetup& setup, const SampleListsLight& light, const Input& input,
+                                    GLuint header, const SampleListsOptions& options = {},
+                                    const LightFrustumFitOptions& fit = {}) {
+        dispatchFit(setup, light, input, header, options);
+        return lightFrustumFitFromHeader(readHeader(header), light, options, fit);
+    }
+
+    /// Fig. 9: reduces counts into the header's statistics words without reading them back.
+    void dispatchStatistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
+        detail::requireBuffer(lists.counts, setup.counts_bytes, "counts", "SampleListBuilder::dispatchStatistics");
+        detail::requireBuffer(lists.header, setup.header_bytes, "header", "SampleListBuilder::dispatchStatistics");
+        SampleListsParams params{};
+        params.grid = glm::uvec4(setup.grid_width, setup.grid_height, setup.sample_count, 0u);
+        uploadParams(params);
+        detail::clearWords(lists.header, PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 4, 0u);
+        program(kStatistics, 0).use();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS, lists.counts);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, lists.header);
+        detail::dispatch(setup.list_groups);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+
+    /// Fig. 9 statistics of the last build into `lists`: dispatch + read back (waits for the GPU).
+    SampleListStatistics statistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
+        dispatchStatistics(setup, lists);
+        return sampleListStatisticsFromHeader(setup, readHeader(lists.header));
+    }
+
+    /// Reads the header back (waits for the GPU).
+    static SampleListsHeader readHeader(GLuint header) {
+        SampleListsHeader h{};
+        glGetNamedBufferSubData(header, 0, sizeof h, &h);
+        return h;
+    }
+
+private:
+    enum Kernel { kCount, kScatter, kFit, kStatistics, kKernels };
+
+    const ShaderLibrary* library_;
+    ScanOptions scan_options_;
+    std::unique_ptr<Scanner> scanner_;
+    gl::Program programs_[kKernels][2];
+    gl::Buffer params_;
+
+    Scanner& scanner() {
+        if (!scanner_) scanner_ = std::make_unique<Scanner>(scan_options_);
+        return *scanner_;
+    }
+
+    gl::Program& program(Kernel kernel, int input) {
+        static const char* const keys[kKernels] = {
+            "penumbra/sample_lists/count.comp.glsl", "penumbra/sample_lists/scatter.comp.glsl",
+            "penumbra/sample_lists/fit.comp.glsl", "penumbra/sample_lists/statistics.comp.glsl"};
+        gl::Program& p = programs_[kernel][input];
+        if (!p) {
+            ShaderDefines defines;
+            if (kernel != kStatistics) defines.push_back({"PENUMBRA_SAMPLE_LISTS_INPUT", std::to_string(input)});
+            p = gl::buildComputeProgram(keys[kernel], defines, *library_);
+        }
+        return p;
+    }
+
+    void uploadParams(const SampleListsParams& params) {
+        if (!params_.id()) params_ = gl::Buffer(sizeof(SampleListsParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        params_.upload(0, &params, sizeof params);
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS, params_.id());
+    }
+
+    static void checkBufferInput(const SampleListsSetup& setup, const SampleBufferInput& input,
+                                 const SampleListsOptions& options, const char* function) {
+        detail::requireBuffer(input.positions, size_t(setup.sample_count) * 16, "input positions", function);
+        if (options.cull_back_facing) {
+            detail::requireBuffer(input.normals, size_t(setup.sample_count) * 16, "input normals", function);
+        }
+    }
+
+    static void checkDepthInput(const SampleDepthInput& input, const SampleListsOptions& options, const char* function) {
+        detail::requireTexture(input.depth_texture, input.view, "depth texture", function);
+        if (options.cull_back_facing) detail::requireTexture(input.normal_texture, input.view, "normal texture", function);
+    }
+
+    static void checkOutputs(const SampleListsSetup& setup, const SampleListsBuffers& out) {
+        const char* f = "SampleListBuilder::build";
+        detail::requireBuffer(out.counts, setup.counts_bytes, "counts", f);
+        detail::requireBuffer(out.offsets, setup.offsets_bytes, "offsets", f);
+        detail::requireBuffer(out.list_positions, setup.list_positions_bytes, "list_positions", f);
+        detail::requireBuffer(out.list_ids, setup.list_ids_bytes, "list_ids", f);
+        detail::requireBuffer(out.sample_slots, setup.sample_slots_bytes, "sample_slots", f);
+        detail::requireBuffer(out.sample_texels, setup.sample_texels_bytes, "sample_texels", f);
+        detail::requireBuffer(out.header, setup.header_bytes, "header", f);
+    }
+
+    static void bindBufferInput(const SampleBufferInput& input, const SampleListsOptions& options) {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS, input.positions);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS,
+                         options.cull_back_facing ? input.normals : 0);
+    }
+
+    static void bindDepthInput(const SampleDepthInput& input, const SampleListsOptions& options) {
+        glBindTextureUnit(PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH, input.depth_texture);
+        glBindSampler(PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH, 0);
+        glBindTextureUnit(PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS, options.cull_back_facing ? input.normal_texture : 0);
+        glBindSampler(PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS, 0);
+    }
+
+    template <typename BindInput>
+    void run(const SampleListsSetup& setup, const SampleListsParams& params, int input, BindInput&& bind_input,
+             const SampleListsBuffers& out) {
+        // Compile before touching any state, so a compile error leaves the caller's buffers alone.
+        gl::Program& count = program(kCount, input);
+        gl::Program& scatter = program(kScatter, input);
+        uploadParams(params);
+        // §3.1: "we initialize the local lists' lengths in the SM to zero".
+        detail::clearWords(out.counts, 0, setup.lists, 0u);
+        detail::clearWords(out.header, PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORD,
+                           PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORDS, 0u);
+        // Pass 1: count.
+        if (setup.sample_count) {
+            count.use();
+            bind_input();
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS, out.counts);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, out.header);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS, out.sample_slots);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS, out.sample_texels);
+            detail::dispatch(setup.sample_groups);
+        }
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // Pass 2: offsets = exclusive scan of the lengths (§3.1, [HSO07]).
+        Scanner& scan = scanner();
+        scan.reserve(setup.lists);
+        scan.exclusive(out.counts, 0, out.offsets, 0, setup.lists);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // Pass 3: scatter.
+        if (setup.sample_count) {
+            scatter.use();
+            glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS, params_.id());
+            bind_input();
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS, out.offsets);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS, out.list_positions);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS, out.list_ids);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS, out.sample_slots);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS, out.sample_texels);
+            detail::dispatch(setup.sample_groups);
+        }
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+
+    template <typename BindInput>
+    void runFit(const SampleListsSetup& setup, const SampleListsParams& params, int input, BindInput&& bind_input,
+                GLuint header) {
+        gl::Program& fit = program(kFit, input);
+        uploadParams(params);
+        detail::clearWords(header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MIN_WORD, 2, 0xFFFFFFFFu);
+        detail::clearWords(header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MAX_WORD, 6, 0u);
+        if (setup.sample_count) {
+            fit.use();
+            bind_input();
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, header);
+            detail::dispatch(setup.sample_groups);
+        }
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+};
+
+/// Reads a GPU-built structure back into the CPU twin's form (waits for the GPU): for tests,
+/// debugging and sampleListsDifference. Only the first `accepted` slots of the list arrays are read.
+inline SampleListsCpu downloadSampleLists(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
+    SampleListsCpu out;
+    out.grid_width = setup.grid_width;
+    out.grid_height = setup.grid_height;
+    out.header = SampleListBuilder::readHeader(lists.header);
+    auto read = [](GLuint buffer, size_t count, auto* data) {
+        if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(*data)), data);
+    };
+    PENUMBRA_CHECK(out.header.accepted <= setup.sample_count, "penumbra::downloadSampleLists: header says ",
+                   out.header.accepted, " accepted samples of ", setup.sample_count);
+    out.counts.resize(setup.lists);
+    out.offsets.resize(setup.lists);
+    out.list_positions.resize(out.header.accepted);
+    out.list_ids.resize(out.header.accepted);
+    out.sample_slots.resize(setup.sample_count);
+    out.sample_texels.resize(setup.sample_count);
+    read(lists.counts, out.counts.size(), out.counts.data());
+    read(lists.offsets, out.offsets.size(), out.offsets.data());
+    read(lists.list_positions, out.list_positions.size(), out.list_positions.data());
+    read(lists.list_ids, out.list_ids.size(), out.list_ids.data());
+    read(lists.sample_slots, out.sample_slots.size(), out.sample_slots.data());
+    read(lists.sample_texels, out.sample_texels.size(), out.sample_texels.data());
+    // Only the counters are part of the structure; fit and statistics words depend on other passes.
+    SampleListsHeader counters{};
+    counters.accepted = out.header.accepted;
+    for (int r = 0; r < 8; ++r) counters.rejected[r] = out.header.rejected[r];
+    out.header = counters;
+    return out;
+}
+
+}  // namespace penumbra
+
+#endif

@@ -1,0 +1,1022 @@
+// View-sample lists (sintorn2008 §3.1, §4.3, Fig. 9): the GPU structure equals the CPU twin's
+// (modulo order inside a list), both satisfy the structure's invariants checked here
+// independently (every accepted sample exactly once, in the list of the texel a double-precision
+// projection puts it in; offsets = running sum of counts), texel borders follow the documented
+// rule, rejections are counted by reason, bad input throws, the GLSL walk API visits every
+// sample from a fragment shader, the §4.3 fit contains every accepted sample, and the Fig. 9
+// statistics agree. Seeds are printed (override with PENUMBRA_SEED); outputs are poisoned first.
+#include "shader_catalog.hpp"
+
+#include <penumbra/gl/headless.hpp>
+#include <penumbra/gl/objects.hpp>
+#include <penumbra/gl/shader.hpp>
+#include <penumbra/sample_lists.hpp>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using penumbra::LightDepthRange;
+using penumbra::SampleListsCpu;
+using penumbra::SampleListsLight;
+using penumbra::SampleListsOptions;
+using penumbra::SampleListsSetup;
+using penumbra::SampleRejection;
+namespace gl = penumbra::gl;
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr uint32_t kPoison = 0xDEADBEEFu;
+
+gl::HeadlessContext& context() {
+    static gl::HeadlessContext ctx;
+    return ctx;
+}
+
+penumbra::SampleListBuilder& builder() {
+    static penumbra::SampleListBuilder b;
+    return b;
+}
+
+uint32_t testSeed() {
+    static const uint32_t seed = [] {
+        const char* env = std::getenv("PENUMBRA_SEED");
+        return env ? static_cast<uint32_t>(std::strtoul(env, nullptr, 10)) : std::random_device{}();
+    }();
+    return seed;
+}
+
+uint32_t code(SampleRejection r) { return penumbra::kSampleListsRejected + static_cast<uint32_t>(r); }
+
+// A point light above the origin looking down, and a directional light from the upper side.
+SampleListsLight pointLight() {
+    SampleListsLight l;
+    const glm::vec3 position(0.3f, 4.0f, 0.2f);
+    l.view_projection = glm::perspective(glm::radians(60.0f), 1.0f, 0.5f, 8.0f) *
+                        glm::lookAt(position, glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f));
+    l.light = glm::vec4(position, 1.0f);
+    return l;
+}
+
+SampleListsLight directionalLight() {
+    SampleListsLight l;
+    const glm::vec3 towards = glm::normalize(glm::vec3(0.2f, 1.0f, 0.3f));
+    l.view_projection = glm::ortho(-2.0f, 2.0f, -2.0f, 2.0f, 0.1f, 10.0f) *
+                        glm::lookAt(towards * 5.0f, glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f));
+    l.light = glm::vec4(towards, 0.0f);
+    return l;
+}
+
+// GPU buffers of one build, allocated from the setup's sizes.
+struct GpuLists {
+    gl::Buffer counts, offsets, list_positions, list_ids, sample_slots, sample_texels, header;
+    explicit GpuLists(const SampleListsSetup& s)
+        : counts(s.counts_bytes), offsets(s.offsets_bytes), list_positions(s.list_positions_bytes),
+          list_ids(s.list_ids_bytes), sample_slots(s.sample_slots_bytes), sample_texels(s.sample_texels_bytes),
+          header(s.header_bytes) {}
+    penumbra::SampleListsBuffers ids() const {
+        return {counts.id(), offsets.id(), list_positions.id(), list_ids.id(), sample_slots.id(), sample_texels.id(),
+                header.id()};
+    }
+    void poison() {
+        for (gl::Buffer* b : {&counts, &offsets, &list_positions, &list_ids, &sample_slots, &sample_texels, &header}) {
+            b->fill(kPoison);
+        }
+    }
+};
+
+struct Samples {
+    std::vector<glm::vec4> positions, normals;
+};
+
+// Random samples around the light frustum plus a sprinkling of special values.
+Samples randomSamples(std::mt19937& rng, size_t n) {
+    std::uniform_real_distribution<float> x(-3.0f, 3.0f), y(-0.5f, 2.5f), unit(-1.0f, 1.0f), pick(0.0f, 1.0f);
+    Samples s;
+    s.positions.resize(n);
+    s.normals.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        glm::vec4 p(x(rng), y(rng), x(rng), 1.0f);
+        glm::vec3 nrm(unit(rng), unit(rng), unit(rng));
+        if (glm::length(nrm) < 1e-3f) nrm = glm::vec3(0.0f, 1.0f, 0.0f);
+        glm::vec4 normal(glm::normalize(nrm), 0.0f);
+        const float r = pick(rng);
+        if (r < 0.02f) p.x = kNaN;
+        else if (r < 0.03f) p.y = (r < 0.025f) ? kInf : -kInf;
+        else if (r < 0.05f) p.w = 0.0f;
+        else if (r < 0.06f) normal.z = kNaN;
+        else if (r < 0.07f) p = glm::vec4(1e30f, -1e30f, 1e30f, 1.0f);  // projects to Inf
+        else if (r < 0.08f) p.y = -10.0f;  // beyond the point light's far plane
+        s.positions[i] = p;
+        s.normals[i] = normal;
+    }
+    return s;
+}
+
+// ----- independent checks (not the library's code) ---------------------------------------------
+
+// Double-precision projection of a sample; nullopt when the sample is within a tolerance of a
+// decision boundary (texel border, frustum plane, light-facing plane) where float rounding decides.
+std::optional<uint32_t> oracleCode(const SampleListsSetup& setup, const SampleListsLight& light,
+                                   const SampleListsOptions& options, const glm::vec4& p, const glm::vec4& n) {
+    if (p.w == 0.0f) return code(SampleRejection::Background);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return code(SampleRejection::NonFinite);
+    if (options.cull_back_facing && (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))) {
+        return code(SampleRejection::NonFinite);
+    }
+    const glm::dmat4 t_matrix(penumbra::lightTextureMatrix(light.view_projection, options.depth_range));
+    const glm::dvec4 t = t_matrix * glm::dvec4(p.x, p.y, p.z, 1.0);
+    if (!std::isfinite(t.x) || !std::isfinite(t.y) || !std::isfinite(t.z) || !std::isfinite(t.w) ||
+        std::abs(t.x) > 1e30 || std::abs(t.w) > 1e30) {
+        return code(SampleRejection::Outside);
+    }
+    const double tol = 1e-4 * (std::abs(t.w) + 1e-3);
+    auto near = [&](double a, double b) { return std::abs(a - b) < tol; };
+    if (near(t.w, 0) || near(t.x, 0) || near(t.x, t.w) || near(t.y, 0) || near(t.y, t.w)) return std::nullopt;
+    if (!(t.w > 0) || t.x < 0 || t.x > t.w || t.y < 0 || t.y > t.w) return code(SampleRejection::Outside);
+    if (options.depth_range != LightDepthRange::Unclipped) {
+        if (near(t.z, 0) || near(t.z, t.w)) return std::nullopt;
+        if (t.z < 0 || t.z > t.w) return code(SampleRejection::Depth);
+    }
+    if (options.cull_back_facing) {
+        const glm::dvec3 to_light = light.light.w == 0.0f ? glm::dvec3(light.light)
+                                                          : glm::dvec3(light.light) - glm::dvec3(p);
+        const double facing = glm::dot(glm::dvec3(n), to_light);
+        if (std::abs(facing) < 1e-5 * glm::length(to_light)) return std::nullopt;
+        if (facing <= 0) return code(SampleRejection::BackFacing);
+    }
+    const double gx = t.x / t.w * setup.grid_width, gy = t.y / t.w * setup.grid_height;
+    if (std::abs(gx - std::round(gx)) < 1e-3 || std::abs(gy - std::round(gy)) < 1e-3) return std::nullopt;
+    const uint32_t x = std::min<uint32_t>(static_cast<uint32_t>(gx), setup.grid_width - 1);
+    const uint32_t y = std::min<uint32_t>(static_cast<uint32_t>(gy), setup.grid_height - 1);
+    return y * setup.grid_width + x;
+}
+
+// Invariants of a structure, checked element by element. `positions` = the input positions by id
+// (null for depth input: positions are then only checked for w = 1). Returns the number of
+// samples the double-precision oracle could decide (so callers can assert the check had teeth).
+size_t checkStructure(const SampleListsSetup& setup, const SampleListsCpu& s, const glm::vec4* positions,
+                      const std::vector<std::optional<uint32_t>>* oracle) {
+    const uint32_t n = setup.sample_count;
+    REQUIRE(s.counts.size() == setup.lists);
+    REQUIRE(s.offsets.size() == setup.lists);
+    REQUIRE(s.sample_slots.size() == n);
+    REQUIRE(s.sample_texels.size() == n);
+    // Offsets are the exclusive running sum of the counts.
+    uint64_t running = 0;
+    size_t bad_offsets = 0;
+    for (uint32_t i = 0; i < setup.lists; ++i) {
+        bad_offsets += s.offsets[i] != running;
+        running += s.counts[i];
+    }
+    CHECK(bad_offsets == 0);
+    CHECK(running == s.header.accepted);
+    REQUIRE(s.list_ids.size() >= s.header.accepted);
+    REQUIRE(s.list_positions.size() >= s.header.accepted);
+    // Walk every list: each entry names a sample of this texel whose slot points back here.
+    std::vector<uint32_t> seen(n, 0);
+    size_t bad_entries = 0;
+    for (uint32_t list = 0; list < setup.lists; ++list) {
+        for (uint32_t k = 0; k < s.counts[list]; ++k) {
+            const uint32_t slot = s.offsets[list] + k;
+            const uint32_t id = s.list_ids[slot];
+            if (id >= n) {
+                ++bad_entries;
+                continue;
+            }
+            ++seen[id];
+            bool ok = s.sample_texels[id] == list && s.sample_slots[id] == slot && s.list_positions[slot].w == 1.0f;
+            if (positions) {
+                ok = ok && std::memcmp(&s.list_positions[slot], &positions[id], 12) == 0;
+            }
+            bad_entries += !ok;
+        }
+    }
+    CHECK(bad_entries == 0);
+    // Every accepted sample exactly once, every rejected one nowhere, reasons counted.
+    size_t bad_samples = 0, decided = 0, oracle_mismatch = 0;
+    std::array<uint32_t, 8> reasons{};
+    uint32_t accepted = 0;
+    for (uint32_t id = 0; id < n; ++id) {
+        const uint32_t c = s.sample_texels[id];
+        if (c < penumbra::kSampleListsRejected) {
+            bad_samples += !(c < setup.lists && seen[id] == 1);
+            ++accepted;
+        } else {
+            bad_samples += !(c - penumbra::kSampleListsRejected < penumbra::kSampleListsReasonCount && seen[id] == 0 &&
+                             s.sample_slots[id] == penumbra::kSampleListsNoSlot);
+            if (c - penumbra::kSampleListsRejected < 8) ++reasons[c - penumbra::kSampleListsRejected];
+        }
+        if (oracle && (*oracle)[id]) {
+            ++decided;
+            oracle_mismatch += *(*oracle)[id] != c;
+        }
+    }
+    CHECK(bad_samples == 0);
+    CHECK(oracle_mismatch == 0);
+    CHECK(accepted == s.header.accepted);
+    for (int r = 0; r < 8; ++r) CHECK(reasons[r] == s.header.rejected[r]);
+    return decided;
+}
+
+std::vector<std::optional<uint32_t>> oracleCodes(const SampleListsSetup& setup, const SampleListsLight& light,
+                                                 const SampleListsOptions& options, const Samples& samples) {
+    std::vector<std::optional<uint32_t>> out(samples.positions.size());
+    for (size_t i = 0; i < out.size(); ++i) {
+        out[i] = oracleCode(setup, light, options, samples.positions[i], samples.normals[i]);
+    }
+    return out;
+}
+
+// GPU build from buffers, poisoned outputs, downloaded.
+SampleListsCpu gpuBuild(const SampleListsSetup& setup, const SampleListsLight& light, const Samples& samples,
+                        const SampleListsOptions& options, GpuLists* keep = nullptr) {
+    auto positions = gl::Buffer::fromVector(samples.positions);
+    auto normals = gl::Buffer::fromVector(samples.normals);
+    GpuLists lists(setup);
+    lists.poison();
+    builder().build(setup, light, penumbra::SampleBufferInput{positions.id(), normals.id()}, lists.ids(), options);
+    SampleListsCpu out = penumbra::downloadSampleLists(setup, lists.ids());
+    gl::checkErrors("sample lists build");
+    if (keep) *keep = std::move(lists);
+    return out;
+}
+
+SampleListsCpu cpuBuild(const SampleListsSetup& setup, const SampleListsLight& light, const Samples& samples,
+                        const SampleListsOptions& options) {
+    return penumbra::buildSampleListsCpu(setup, light, samples.positions.data(), samples.normals.data(), options);
+}
+
+// Fragment-shader walk of every list (tests/shaders/sample_lists/walk.frag.glsl); checks its
+// error counter, the visit count of every sample and every shadow word against the pattern.
+void walkLists(const SampleListsSetup& setup, const SampleListsLight& light, const SampleListsOptions& options,
+               const GpuLists& lists, const SampleListsCpu& structure, uint32_t bits) {
+    CAPTURE(bits);
+    static const penumbra::ShaderLibrary library = penumbra::test::catalogLibrary();
+    gl::Program walk = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "sample_lists/walk.frag.glsl"},
+                                        {{"PENUMBRA_SAMPLE_LISTS_SHADOW_BITS", std::to_string(bits)}}, library);
+    const penumbra::SampleListsParams params = penumbra::sampleListsParams(setup, light, options);
+    gl::Buffer params_buffer(sizeof params, &params);
+    const uint32_t slots = structure.header.accepted;
+    gl::Buffer shadow(std::max<size_t>(4, penumbra::shadowBitsBytes(slots, bits)));
+    shadow.fill(0u);  // the integrator clears its shadow bits before the light pass
+    std::vector<uint32_t> results_init(4 + setup.sample_count, 0u);
+    results_init[1] = 0xFFFFFFFFu;
+    auto results = gl::Buffer::fromVector(results_init);
+    GLuint fbo = 0, vao = 0;
+    glCreateFramebuffers(1, &fbo);
+    glNamedFramebufferParameteri(fbo, GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(setup.grid_width));
+    glNamedFramebufferParameteri(fbo, GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(setup.grid_height));
+    REQUIRE(glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
+    glCreateVertexArrays(1, &vao);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glViewport(0, 0, static_cast<GLsizei>(setup.grid_width), static_cast<GLsizei>(setup.grid_height));
+    glBindVertexArray(vao);
+    walk.use();
+    glBindBufferBase(GL_UNIFORM_BUFFER, 0, params_buffer.id());
+    const GLuint ssbos[] = {lists.counts.id(), lists.offsets.id(), lists.list_positions.id(), lists.list_ids.id(),
+                            lists.sample_slots.id(), shadow.id(), results.id()};
+    for (GLuint i = 0; i < 7; ++i) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, i, ssbos[i]);
+    // §3.1 multi-pass blocks: llvmpipe stops an invocation after 65 535 loop iterations in total,
+    // and each sample costs about 2 + 2 * bits iterations here.
+    const uint32_t block_size = 16384 / (1 + bits);
+    uint32_t longest = 0;
+    for (uint32_t c : structure.counts) longest = std::max(longest, c);
+    const uint32_t passes = static_cast<uint32_t>(penumbra::detail::divUp(longest, block_size));
+    glUniform1ui(1, block_size);
+    for (uint32_t block = 0; block < std::max(passes, 1u); ++block) {
+        glUniform1ui(0, block);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    MESSAGE("walked lists up to ", longest, " long in ", passes, " passes of ", block_size);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteFramebuffers(1, &fbo);
+    glDeleteVertexArrays(1, &vao);
+    gl::checkErrors("walk lists");
+
+    const auto got = results.download<uint32_t>();
+    CHECK(got[0] == 0);
+    INFO("first bad slot ", got[1]);
+    size_t bad_visits = 0;
+    for (uint32_t id = 0; id < setup.sample_count; ++id) {
+        const bool accepted = structure.sample_texels[id] < penumbra::kSampleListsRejected;
+        bad_visits += got[4 + id] != (accepted ? 1u : 0u);
+    }
+    CHECK(bad_visits == 0);
+    // Expected shadow words from the host twin of the addressing.
+    std::vector<uint32_t> expected(shadow.size() / 4, 0u);
+    size_t set_bits = 0;
+    for (uint32_t slot = 0; slot < slots; ++slot) {
+        const uint32_t id = structure.list_ids[slot];
+        for (uint32_t k = 0; k < bits; ++k) {
+            if ((((id * 2654435761u) ^ (k * 40503u)) & 4u) == 0) continue;
+            const auto at = penumbra::shadowBitAddress(slot, k, bits);
+            REQUIRE(at.word < expected.size());
+            expected[at.word] |= 1u << at.bit;
+            ++set_bits;
+        }
+    }
+    if (slots > 8) CHECK(set_bits > 0);
+    const auto words = shadow.download<uint32_t>();
+    size_t bad_words = 0;
+    for (size_t w = 0; w < expected.size(); ++w) bad_words += words[w] != expected[w];
+    CHECK(bad_words == 0);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+TEST_CASE("setup, parameters and shadow-bit sizing validate and name bad values") {
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsSetup(0, 4, 10), doctest::Contains("grid width 0"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsSetup(4, 0, 10), doctest::Contains("grid height 0"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsSetup(16385, 4, 10), doctest::Contains("grid width 16385"),
+                         penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsSetup(4, 100000, 10), doctest::Contains("grid height 100000"),
+                         penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsSetup(4, 4, 0x100000000ull), doctest::Contains("sample count 4294967296"),
+                         penumbra::Error);
+    const SampleListsSetup s = penumbra::sampleListsSetup(7, 5, 1000);
+    CHECK(s.lists == 35);
+    CHECK(s.counts_bytes == 140);
+    CHECK(s.offsets_bytes == 140);
+    CHECK(s.list_positions_bytes == 16000);
+    CHECK(s.list_ids_bytes == 4000);
+    CHECK(s.sample_slots_bytes == 4000);
+    CHECK(s.sample_texels_bytes == 4000);
+    CHECK(s.header_bytes == 96);
+    CHECK(s.sample_groups.groups == 4);
+    CHECK(s.list_groups.groups == 1);
+    const SampleListsSetup big = penumbra::sampleListsSetup(16384, 16384, 65535ull * 256 + 1);
+    CHECK(big.sample_groups.groups == 65536);
+    CHECK(uint64_t(big.sample_groups.x) * big.sample_groups.y >= 65536);
+
+    SampleListsLight light = pointLight();
+    light.view_projection[2][1] = kNaN;
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsParams(s, light), doctest::Contains("view_projection[2][1]"),
+                         penumbra::Error);
+    light = pointLight();
+    light.light.w = 0.5f;
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsParams(s, light), doctest::Contains("light.w = 0.5"), penumbra::Error);
+    light.light = glm::vec4(0.0f);
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsParams(s, light), doctest::Contains("direction (0, 0, 0)"),
+                         penumbra::Error);
+    light.light = glm::vec4(kInf, 0.0f, 0.0f, 1.0f);
+    CHECK_THROWS_AS(penumbra::sampleListsParams(s, light), penumbra::Error);
+    penumbra::SampleListsView view;
+    view.width = 10;
+    view.height = 10;
+    CHECK_THROWS_WITH_AS(penumbra::sampleListsParams(s, pointLight(), {}, &view),
+                         doctest::Contains("does not match the setup's sample count 1000"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::buildSampleListsCpu(s, pointLight(), nullptr, nullptr),
+                         doctest::Contains("positions is null"), penumbra::Error);
+    std::vector<glm::vec4> positions(1000, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    CHECK_THROWS_WITH_AS(penumbra::buildSampleListsCpu(s, pointLight(), positions.data(), nullptr),
+                         doctest::Contains("normals is null"), penumbra::Error);
+    CHECK_NOTHROW(penumbra::buildSampleListsCpu(s, pointLight(), positions.data(), nullptr,
+                                                SampleListsOptions{false, LightDepthRange::MinusOneToOne}));
+
+    // Shadow bits: stride, words, addresses (closed form).
+    const uint32_t strides[] = {0, 1, 2, 4, 4, 8, 8, 8, 8, 16, 16, 16, 16, 16, 16, 16, 16};
+    for (uint32_t bits = 1; bits <= 16; ++bits) CHECK(penumbra::shadowStrideBits(bits) == strides[bits]);
+    for (uint32_t bits = 17; bits <= 200; ++bits) CHECK(penumbra::shadowStrideBits(bits) == (bits + 31) / 32 * 32);
+    CHECK_THROWS_WITH_AS(penumbra::shadowStrideBits(0), doctest::Contains("bits per sample 0"), penumbra::Error);
+    CHECK_THROWS_AS(penumbra::shadowStrideBits(65537), penumbra::Error);
+    CHECK(penumbra::shadowBitsWords(0, 1) == 0);
+    CHECK(penumbra::shadowBitsWords(33, 1) == 2);
+    CHECK(penumbra::shadowBitsWords(10, 5) == 3);  // stride 8: 4 slots per word
+    CHECK(penumbra::shadowBitsWords(10, 40) == 20);
+    CHECK(penumbra::shadowBitsBytes(10, 128) == 160);
+    CHECK_THROWS_AS(penumbra::shadowBitsWords(0xFFFFFF00u, 1024), penumbra::Error);
+    CHECK(penumbra::shadowBitAddress(37, 0, 1).word == 1);
+    CHECK(penumbra::shadowBitAddress(37, 0, 1).bit == 5);
+    CHECK(penumbra::shadowBitAddress(5, 3, 5).word == 1);
+    CHECK(penumbra::shadowBitAddress(5, 3, 5).bit == 11);
+    CHECK(penumbra::shadowBitAddress(3, 35, 40).word == 7);
+    CHECK(penumbra::shadowBitAddress(3, 35, 40).bit == 3);
+    // Every (slot, bit) has its own bit: no two collide.
+    for (uint32_t bits : {1u, 3u, 5u, 16u, 17u, 40u, 64u}) {
+        std::vector<uint32_t> words(penumbra::shadowBitsWords(50, bits), 0u);
+        size_t collisions = 0;
+        for (uint32_t slot = 0; slot < 50; ++slot) {
+            for (uint32_t k = 0; k < bits; ++k) {
+                const auto at = penumbra::shadowBitAddress(slot, k, bits);
+                REQUIRE(at.word < words.size());
+                collisions += (words[at.word] >> at.bit) & 1u;
+                words[at.word] |= 1u << at.bit;
+            }
+        }
+        CHECK(collisions == 0);
+    }
+}
+
+TEST_CASE("texel borders, frustum, near/far, NaN/Inf, background and back-facing follow the rules (closed form)") {
+    context();
+    // Directional light straight down -z onto an 8 x 4 grid: view = translate(0, 0, -5) exactly,
+    // ortho [-1, 1]^2, near 1, far 9, so u = (x + 1) / 2 and v = (y + 1) / 2 are exact for
+    // dyadic x, y: x = -1 + k / 4 lies exactly on texel border k of W = 8.
+    SampleListsLight light;
+    light.view_projection = glm::ortho(-1.0f, 1.0f, -1.0f, 1.0f, 1.0f, 9.0f) *
+                            glm::lookAt(glm::vec3(0.0f, 0.0f, 5.0f), glm::vec3(0.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+    light.light = glm::vec4(0.0f, 0.0f, 1.0f, 0.0f);
+    const glm::vec4 up(0.0f, 0.0f, 1.0f, 0.0f);
+    Samples s;
+    std::vector<uint32_t> expected;
+    auto add = [&](glm::vec4 p, glm::vec4 n, uint32_t e) {
+        s.positions.push_back(p);
+        s.normals.push_back(n);
+        expected.push_back(e);
+    };
+    const uint32_t W = 8, H = 4;
+    for (uint32_t k = 0; k <= W; ++k) {
+        for (uint32_t j = 0; j <= H; ++j) {
+            const float x = -1.0f + static_cast<float>(k) / 4.0f, y = -1.0f + static_cast<float>(j) / 2.0f;
+            // Exactly on the border: the texel to the right / top, the last one for u == 1.
+            add({x, y, 0.0f, 1.0f}, up, std::min(j, H - 1) * W + std::min(k, W - 1));
+            // Just below the border: the texel to the left / bottom, outside below 0.
+            const float xm = x - 1e-5f, ym = y - 1e-5f;
+            const bool out = k == 0 || j == 0;
+            add({xm, ym, 0.0f, 1.0f}, up, out ? code(SampleRejection::Outside) : (j - 1) * W + (k - 1));
+            // Just above: outside past u == 1.
+            const bool out_above = k == W || j == H;
+            add({x + 1e-5f, y + 1e-5f, 0.0f, 1.0f}, up,
+                out_above ? code(SampleRejection::Outside) : std::min(j, H - 1) * W + std::min(k, W - 1));
+        }
+    }
+    // Near/far (light view z = z - 5; near 1 -> z = 4, far 9 -> z = -4), closed planes.
+    add({0.1f, 0.1f, 4.0f, 1.0f}, up, 4 * 8 / 2 + 4);  // on the near plane: inside (texel (4, 2))
+    add({0.1f, 0.1f, -4.0f, 1.0f}, up, 2 * 8 + 4);     // on the far plane: inside
+    add({0.1f, 0.1f, 4.5f, 1.0f}, up, code(SampleRejection::Depth));
+    add({0.1f, 0.1f, -4.5f, 1.0f}, up, code(SampleRejection::Depth));
+    // Non-finite, background and precedence.
+    add({kNaN, 0.1f, 0.0f, 1.0f}, up, code(SampleRejection::NonFinite));
+    add({0.1f, kInf, 0.0f, 1.0f}, up, code(SampleRejection::NonFinite));
+    add({0.1f, 0.1f, -kInf, 1.0f}, up, code(SampleRejection::NonFinite));
+    add({0.1f, 0.1f, 0.0f, 1.0f}, {kNaN, 0.0f, 1.0f, 0.0f}, code(SampleRejection::NonFinite));
+    add({kNaN, kNaN, kNaN, 0.0f}, up, code(SampleRejection::Background));
+    add({0.1f, 0.1f, 0.0f, 0.0f}, up, code(SampleRejection::Background));
+    add({3.0f, 0.1f, 0.0f, 1.0f}, -up, code(SampleRejection::Outside));     // outside beats back-facing
+    add({0.1f, 0.1f, 6.0f, 1.0f}, -up, code(SampleRejection::Depth));       // depth beats back-facing
+    // Light-facing (Fig. 2): dot(n, to_light) <= 0 is back-facing, including 0.
+    add({0.1f, 0.1f, 0.0f, 1.0f}, -up, code(SampleRejection::BackFacing));
+    add({0.1f, 0.1f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f, 0.0f}, code(SampleRejection::BackFacing));
+    add({0.1f, 0.1f, 0.0f, 1.0f}, {0.0f, 0.0f, 1e-30f, 0.0f}, 2 * 8 + 4);
+    // Far outside: the transform overflows to Inf.
+    add({3e38f, 3e38f, 0.0f, 1.0f}, up, code(SampleRejection::Outside));
+
+    const SampleListsSetup setup = penumbra::sampleListsSetup(W, H, s.positions.size());
+    const SampleListsOptions options;
+    const SampleListsCpu cpu = cpuBuild(setup, light, s, options);
+    const SampleListsCpu gpu = gpuBuild(setup, light, s, options);
+    for (size_t id = 0; id < expected.size(); ++id) {
+        CAPTURE(id);
+        CAPTURE(s.positions[id].x);
+        CAPTURE(s.positions[id].y);
+        CHECK(cpu.sample_texels[id] == expected[id]);
+        CHECK(gpu.sample_texels[id] == expected[id]);
+    }
+    checkStructure(setup, cpu, s.positions.data(), nullptr);
+    checkStructure(setup, gpu, s.positions.data(), nullptr);
+    CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    // The CPU twin orders every list by sample id.
+    for (uint32_t list = 0; list < setup.lists; ++list) {
+        for (uint32_t k = 1; k < cpu.counts[list]; ++k) {
+            CHECK(cpu.list_ids[cpu.offsets[list] + k - 1] < cpu.list_ids[cpu.offsets[list] + k]);
+        }
+    }
+
+    // Switches: no culling keeps back-facing and NaN-normal samples; Unclipped keeps near/far ones.
+    SampleListsOptions keep_all{false, LightDepthRange::Unclipped};
+    const SampleListsCpu cpu_all = cpuBuild(setup, light, s, keep_all);
+    const SampleListsCpu gpu_all = gpuBuild(setup, light, s, keep_all);
+    CHECK(cpu_all.header.rejected[uint32_t(SampleRejection::BackFacing)] == 0);
+    CHECK(cpu_all.header.rejected[uint32_t(SampleRejection::Depth)] == 0);
+    CHECK(cpu_all.header.rejected[uint32_t(SampleRejection::NonFinite)] == 3);
+    // 2 back-facing + 2 beyond near/far + 1 NaN normal + 1 beyond far and back-facing.
+    CHECK(cpu_all.header.accepted == cpu.header.accepted + 6);
+    CHECK(penumbra::sampleListsDifference(gpu_all, cpu_all) == "");
+}
+
+TEST_CASE("GPU lists equal the CPU twin and the invariants on random samples across work-group edges") {
+    context();
+    const uint32_t seed = testSeed();
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    const std::pair<uint32_t, uint32_t> grids[] = {{1, 1}, {7, 5}, {64, 64}, {300, 1}, {257, 129}};
+    size_t decided_total = 0, accepted_total = 0;
+    int round = 0;
+    for (size_t n : {size_t(0), size_t(1), size_t(255), size_t(256), size_t(257), size_t(65537)}) {
+        for (int light_kind = 0; light_kind < 2; ++light_kind) {
+            const auto grid = grids[(round++) % 5];
+            CAPTURE(n);
+            CAPTURE(light_kind);
+            CAPTURE(grid.first);
+            CAPTURE(grid.second);
+            const SampleListsLight light = light_kind == 0 ? pointLight() : directionalLight();
+            const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, n);
+            const Samples samples = randomSamples(rng, n);
+            SampleListsOptions options;
+            options.cull_back_facing = (round % 3) != 0;
+            options.depth_range = (round % 4) == 1 ? LightDepthRange::Unclipped : LightDepthRange::MinusOneToOne;
+            const SampleListsCpu cpu = cpuBuild(setup, light, samples, options);
+            const SampleListsCpu gpu = gpuBuild(setup, light, samples, options);
+            const auto oracle = oracleCodes(setup, light, options, samples);
+            decided_total += checkStructure(setup, cpu, samples.positions.data(), &oracle);
+            checkStructure(setup, gpu, samples.positions.data(), &oracle);
+            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            accepted_total += cpu.header.accepted;
+        }
+    }
+    MESSAGE("oracle decided ", decided_total, " samples; ", accepted_total, " accepted");
+    CHECK(decided_total > 100000);
+    CHECK(accepted_total > 10000);
+}
+
+TEST_CASE("GPU and CPU agree bit for bit on samples within a few ULPs of texel borders") {
+    context();
+    const uint32_t seed = testSeed() + 1;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (const SampleListsLight& light : {pointLight(), directionalLight()}) {
+        for (auto grid : {std::pair<uint32_t, uint32_t>{64, 64}, {100, 37}, {1024, 3}}) {
+            const uint32_t W = grid.first, H = grid.second;
+            // Aim at border points in light-texture space, unproject with the light's inverse,
+            // then nudge the world position by a few ULPs.
+            const glm::mat4 t_matrix = penumbra::lightTextureMatrix(light.view_projection, LightDepthRange::MinusOneToOne);
+            const glm::dmat4 inverse = glm::inverse(glm::dmat4(t_matrix));
+            std::uniform_int_distribution<uint32_t> bx(0, W), by(0, H), ulps(0, 8);
+            std::uniform_real_distribution<double> depth(0.2, 0.8), along(0.0, 1.0);
+            std::uniform_int_distribution<int> which(0, 2);
+            Samples s;
+            const size_t n = 20000;
+            for (size_t i = 0; i < n; ++i) {
+                double u = double(bx(rng)) / W, v = double(by(rng)) / H;
+                const int w = which(rng);  // 0: corner, 1: vertical border, 2: horizontal border
+                if (w == 1) v = along(rng);
+                if (w == 2) u = along(rng);
+                const glm::dvec4 h = inverse * glm::dvec4(u, v, depth(rng), 1.0);
+                glm::vec3 p(h / h.w);
+                for (int c = 0; c < 3; ++c) {
+                    for (uint32_t k = ulps(rng); k > 0; --k) {
+                        p[c] = std::nextafter(p[c], (rng() & 1) ? kInf : -kInf);
+                    }
+                }
+                s.positions.emplace_back(p, 1.0f);
+                s.normals.emplace_back(glm::normalize(glm::vec3(light.light)), 0.0f);  // front-facing
+            }
+            const SampleListsSetup setup = penumbra::sampleListsSetup(W, H, n);
+            const SampleListsOptions options;
+            const SampleListsCpu cpu = cpuBuild(setup, light, s, options);
+            const SampleListsCpu gpu = gpuBuild(setup, light, s, options);
+            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            checkStructure(setup, gpu, s.positions.data(), nullptr);
+            // The test has teeth: many samples sit exactly on a border in float arithmetic.
+            const penumbra::SampleListsParams params = penumbra::sampleListsParams(setup, light, options);
+            size_t on_border = 0;
+            for (const glm::vec4& p : s.positions) {
+                const glm::vec4 t = penumbra::detail::transformPoint(params.light_texture, p.x, p.y, p.z);
+                const float gx = (t.x / t.w) * float(W);
+                on_border += t.w > 0 && gx == std::floor(gx);
+            }
+            MESSAGE("grid ", W, "x", H, ": ", on_border, " of ", n, " samples exactly on a vertical border, ",
+                    cpu.header.accepted, " accepted");
+            CHECK(on_border > 100);
+        }
+    }
+}
+
+TEST_CASE("depth-texture input: GPU equals the CPU twin") {
+    context();
+    const uint32_t seed = testSeed() + 2;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), d01(0.0f, 1.0f);
+    for (auto size : {std::pair<uint32_t, uint32_t>{37, 23}, {64, 64}, {300, 2}}) {
+        for (int variant = 0; variant < 4; ++variant) {
+            const uint32_t vw = size.first, vh = size.second;
+            CAPTURE(vw);
+            CAPTURE(vh);
+            CAPTURE(variant);
+            penumbra::SampleListsView view;
+            view.width = vw;
+            view.height = vh;
+            view.depth_zero_to_one = variant & 1;
+            const float aspect = 1.0f;  // not the pixel aspect: keeps the 300 x 2 strip on the scene
+            const glm::mat4 projection = view.depth_zero_to_one
+                                             ? glm::perspectiveRH_ZO(glm::radians(50.0f), aspect, 0.5f, 12.0f)
+                                             : glm::perspective(glm::radians(50.0f), aspect, 0.5f, 12.0f);
+            const glm::mat4 camera =
+                projection * glm::lookAt(glm::vec3(0.0f, 3.0f, 5.0f), glm::vec3(0.0f), glm::vec3(0, 1, 0));
+            view.inverse_view_projection = glm::inverse(camera);
+            std::vector<float> depth(size_t(vw) * vh);
+            std::vector<glm::vec4> normals(depth.size());
+            for (size_t i = 0; i < depth.size(); ++i) {
+                const float r = d01(rng);
+                depth[i] = r < 0.1f ? 1.0f : r < 0.12f ? 0.0f : std::pow(d01(rng), 0.2f);
+                normals[i] = glm::vec4(glm::normalize(glm::vec3(unit(rng), unit(rng) + 1.5f, unit(rng))), 0.0f);
+            }
+            gl::Texture depth_texture(GL_TEXTURE_2D), normal_texture(GL_TEXTURE_2D);
+            glTextureStorage2D(depth_texture.id(), 1, GL_DEPTH_COMPONENT32F, GLsizei(vw), GLsizei(vh));
+            glTextureSubImage2D(depth_texture.id(), 0, 0, 0, GLsizei(vw), GLsizei(vh), GL_DEPTH_COMPONENT, GL_FLOAT,
+                                depth.data());
+            glTextureStorage2D(normal_texture.id(), 1, GL_RGBA32F, GLsizei(vw), GLsizei(vh));
+            glTextureSubImage2D(normal_texture.id(), 0, 0, 0, GLsizei(vw), GLsizei(vh), GL_RGBA, GL_FLOAT,
+                                normals.data());
+            const SampleListsLight light = (variant & 2) ? directionalLight() : pointLight();
+            SampleListsOptions options;
+            options.cull_back_facing = variant != 3;
+            const SampleListsSetup setup = penumbra::sampleListsSetup(97, 61, depth.size());
+            const SampleListsCpu cpu = penumbra::buildSampleListsCpu(setup, light, view, depth.data(), normals.data(), options);
+            GpuLists lists(setup);
+            lists.poison();
+            builder().build(setup, light, penumbra::SampleDepthInput{depth_texture.id(), normal_texture.id(), view},
+                            lists.ids(), options);
+            const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
+            gl::checkErrors("depth-input build");
+            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            checkStructure(setup, gpu, nullptr, nullptr);
+            // Reconstructed positions: the twin's are within float error of a double unprojection.
+            size_t far_off = 0;
+            for (uint32_t id = 0; id < setup.sample_count; ++id) {
+                if (depth[id] == 1.0f) {
+                    CHECK(cpu.sample_texels[id] == code(SampleRejection::Background));
+                    continue;
+                }
+                const uint32_t slot = cpu.sample_slots[id];
+                if (slot == penumbra::kSampleListsNoSlot) continue;
+                const double z = view.depth_zero_to_one ? depth[id] : 2.0 * depth[id] - 1.0;
+                const glm::dvec4 h = glm::dmat4(view.inverse_view_projection) *
+                                     glm::dvec4((id % vw + 0.5) / vw * 2 - 1, (id / vw + 0.5) / vh * 2 - 1, z, 1.0);
+                const glm::dvec3 p = glm::dvec3(h) / h.w;
+                far_off += glm::length(p - glm::dvec3(cpu.list_positions[slot])) > 1e-3 * (1.0 + glm::length(p));
+            }
+            CHECK(far_off == 0);
+            CHECK(cpu.header.accepted > 0);
+            CHECK(cpu.header.rejected[uint32_t(SampleRejection::Background)] > 0);
+        }
+    }
+}
+
+TEST_CASE("zero samples give an empty structure") {
+    context();
+    const SampleListsSetup setup = penumbra::sampleListsSetup(13, 7, 0);
+    CHECK(setup.list_positions_bytes == 0);
+    const SampleListsCpu cpu = cpuBuild(setup, pointLight(), Samples{}, {});
+    GpuLists lists(setup);
+    lists.poison();
+    builder().build(setup, pointLight(), penumbra::SampleBufferInput{}, lists.ids());
+    const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
+    CHECK(gpu.counts == std::vector<uint32_t>(91, 0u));
+    CHECK(gpu.offsets == std::vector<uint32_t>(91, 0u));
+    CHECK(gpu.header.accepted == 0);
+    for (uint32_t r : gpu.header.rejected) CHECK(r == 0);
+    CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    const penumbra::SampleListStatistics stats = builder().statistics(setup, lists.ids());
+    CHECK(stats == penumbra::sampleListStatisticsCpu(cpu));
+    CHECK(stats.occupied_lists == 0);
+    CHECK(stats.averageOccupiedLength() == 0.0);
+    const auto fit = builder().fitLightFrustum(setup, pointLight(), penumbra::SampleBufferInput{}, lists.header.id());
+    CHECK_FALSE(fit.valid);
+    CHECK(fit.view_projection == pointLight().view_projection);
+    gl::checkErrors("zero samples");
+}
+
+TEST_CASE("all samples in one texel: a list of 2^20 samples, walked from a fragment shader") {
+    context();
+    const uint32_t seed = testSeed() + 3;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    const SampleListsLight light = directionalLight();
+    const uint32_t n = 1u << 20;
+    // Points inside one texel of a 32 x 32 grid: unproject random (u, v) inside texel (11, 20).
+    const glm::dmat4 inverse =
+        glm::inverse(glm::dmat4(penumbra::lightTextureMatrix(light.view_projection, LightDepthRange::MinusOneToOne)));
+    std::uniform_real_distribution<double> inside(0.1, 0.9), depth(0.2, 0.8);
+    Samples s;
+    s.positions.resize(n);
+    s.normals.assign(n, glm::vec4(glm::vec3(light.light), 0.0f));
+    for (uint32_t i = 0; i < n; ++i) {
+        const glm::dvec4 h = inverse * glm::dvec4((11 + inside(rng)) / 32, (20 + inside(rng)) / 32, depth(rng), 1.0);
+        s.positions[i] = glm::vec4(glm::vec3(h / h.w), 1.0f);
+    }
+    const SampleListsSetup setup = penumbra::sampleListsSetup(32, 32, n);
+    const SampleListsOptions options;
+    const SampleListsCpu cpu = cpuBuild(setup, light, s, options);
+    GpuLists lists(setup);
+    const SampleListsCpu gpu = gpuBuild(setup, light, s, options, &lists);
+    CHECK(cpu.counts[20 * 32 + 11] == n);
+    CHECK(gpu.counts[20 * 32 + 11] == n);
+    CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    checkStructure(setup, gpu, s.positions.data(), nullptr);
+    const auto stats = builder().statistics(setup, lists.ids());
+    CHECK(stats.max_list_length == n);
+    CHECK(stats.occupied_lists == 1);
+    CHECK(stats == penumbra::sampleListStatisticsCpu(cpu));
+    walkLists(setup, light, options, lists, gpu, 1);
+}
+
+TEST_CASE("the GLSL list API walks every list from a fragment shader; shadow bits land where the host says") {
+    context();
+    const uint32_t seed = testSeed() + 4;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (uint32_t bits : {1u, 5u, 40u}) {
+        for (const SampleListsLight& light : {pointLight(), directionalLight()}) {
+            // A fine grid (short lists) and a coarse one (lists span several blocks of a pass).
+            const bool coarse = light.light.w == 0.0f;
+            const SampleListsSetup setup = penumbra::sampleListsSetup(coarse ? 4 : 61, coarse ? 3 : 45, 30000);
+            const Samples samples = randomSamples(rng, setup.sample_count);
+            const SampleListsOptions options;
+            GpuLists lists(setup);
+            const SampleListsCpu gpu = gpuBuild(setup, light, samples, options, &lists);
+            REQUIRE(gpu.header.accepted > 1000);
+            walkLists(setup, light, options, lists, gpu, bits);
+        }
+    }
+}
+
+TEST_CASE("bad input throws penumbra::Error naming the value") {
+    context();
+    const SampleListsSetup setup = penumbra::sampleListsSetup(16, 16, 1000);
+    Samples s;
+    s.positions.assign(1000, glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    s.normals.assign(1000, glm::vec4(0.0f, 1.0f, 0.0f, 0.0f));
+    auto positions = gl::Buffer::fromVector(s.positions);
+    auto normals = gl::Buffer::fromVector(s.normals);
+    GpuLists lists(setup);
+    const penumbra::SampleBufferInput input{positions.id(), normals.id()};
+    CHECK_NOTHROW(builder().build(setup, pointLight(), input, lists.ids()));
+    // Each output too small, by name.
+    const char* names[] = {"counts", "offsets", "list_positions", "list_ids", "sample_slots", "sample_texels", "header"};
+    for (int which = 0; which < 7; ++which) {
+        CAPTURE(names[which]);
+        gl::Buffer small(8);
+        penumbra::SampleListsBuffers out = lists.ids();
+        GLuint* fields[] = {&out.counts, &out.offsets, &out.list_positions, &out.list_ids, &out.sample_slots,
+                            &out.sample_texels, &out.header};
+        *fields[which] = small.id();
+        CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), input, out),
+                             doctest::Contains((std::string(names[which]) + " buffer").c_str()), penumbra::Error);
+        *fields[which] = 0;
+        CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), input, out),
+                             doctest::Contains((std::string(names[which]) + " (0) is not a buffer").c_str()), penumbra::Error);
+    }
+    gl::Buffer small(100);
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleBufferInput{small.id(), normals.id()},
+                                         lists.ids()),
+                         doctest::Contains("input positions buffer"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleBufferInput{positions.id(), 0}, lists.ids()),
+                         doctest::Contains("input normals"), penumbra::Error);
+    // Without culling the normals are not needed.
+    CHECK_NOTHROW(builder().build(setup, pointLight(), penumbra::SampleBufferInput{positions.id(), 0}, lists.ids(),
+                                  SampleListsOptions{false, LightDepthRange::MinusOneToOne}));
+    SampleListsLight bad = pointLight();
+    bad.light.w = 2.0f;
+    CHECK_THROWS_WITH_AS(builder().build(setup, bad, input, lists.ids()), doctest::Contains("light.w = 2"),
+                         penumbra::Error);
+    CHECK_THROWS_WITH_AS(builder().dispatchFit(setup, pointLight(), input, 0), doctest::Contains("header (0)"),
+                         penumbra::Error);
+    // Depth input: size and texture checks.
+    penumbra::SampleListsView view;
+    view.width = 40;
+    view.height = 25;
+    gl::Texture depth(GL_TEXTURE_2D), normal(GL_TEXTURE_2D), cube(GL_TEXTURE_CUBE_MAP);
+    glTextureStorage2D(depth.id(), 1, GL_DEPTH_COMPONENT32F, 40, 24);
+    glTextureStorage2D(normal.id(), 1, GL_RGBA32F, 40, 25);
+    glTextureStorage2D(cube.id(), 1, GL_RGBA8, 64, 64);
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleDepthInput{depth.id(), normal.id(), view},
+                                         lists.ids()),
+                         doctest::Contains("depth texture"), penumbra::Error);
+    gl::Texture depth_ok(GL_TEXTURE_2D);
+    glTextureStorage2D(depth_ok.id(), 1, GL_DEPTH_COMPONENT32F, 40, 25);
+    CHECK_NOTHROW(builder().build(setup, pointLight(), penumbra::SampleDepthInput{depth_ok.id(), normal.id(), view},
+                                  lists.ids()));
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleDepthInput{depth_ok.id(), cube.id(), view},
+                                         lists.ids()),
+                         doctest::Contains("normal texture"), penumbra::Error);
+    glTextureParameteri(depth_ok.id(), GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleDepthInput{depth_ok.id(), normal.id(), view},
+                                         lists.ids()),
+                         doctest::Contains("GL_TEXTURE_COMPARE_MODE"), penumbra::Error);
+    view.width = 41;
+    CHECK_THROWS_WITH_AS(builder().build(setup, pointLight(), penumbra::SampleDepthInput{depth_ok.id(), normal.id(), view},
+                                         lists.ids()),
+                         doctest::Contains("view 41 x 25"), penumbra::Error);
+    gl::checkErrors("bad input");
+}
+
+TEST_CASE("§4.3 light-frustum fit: GPU equals CPU, every accepted sample stays inside, the box is tight") {
+    context();
+    const uint32_t seed = testSeed() + 5;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (int kind = 0; kind < 2; ++kind) {
+        CAPTURE(kind);
+        const SampleListsLight light = kind == 0 ? pointLight() : directionalLight();
+        // Samples in a small region, so the fit really crops.
+        std::uniform_real_distribution<float> x(-0.6f, 0.4f), y(0.0f, 0.7f), z(-0.3f, 0.5f);
+        const size_t n = 50000;
+        Samples s;
+        for (size_t i = 0; i < n; ++i) {
+            s.positions.emplace_back(x(rng), y(rng), z(rng), 1.0f);
+            s.normals.emplace_back(glm::normalize(glm::vec3(light.light.w == 0 ? glm::vec3(light.light)
+                                                                                : glm::vec3(light.light) - glm::vec3(s.positions.back()))),
+                                   0.0f);
+            if (i % 97 == 0) s.positions.back().x = kNaN;
+        }
+        const SampleListsSetup setup = penumbra::sampleListsSetup(128, 128, n);
+        const SampleListsOptions options;
+        auto positions = gl::Buffer::fromVector(s.positions);
+        auto normals = gl::Buffer::fromVector(s.normals);
+        const penumbra::SampleBufferInput input{positions.id(), normals.id()};
+        gl::Buffer header(setup.header_bytes);
+        header.fill(kPoison);
+        const penumbra::LightFrustumFit gpu = builder().fitLightFrustum(setup, light, input, header.id(), options);
+        const penumbra::LightFrustumFit cpu =
+            penumbra::fitLightFrustumCpu(setup, light, s.positions.data(), s.normals.data(), options);
+        REQUIRE(gpu.valid);
+        REQUIRE(cpu.valid);
+        CHECK(std::memcmp(&gpu.keys.fit_min_u, &cpu.keys.fit_min_u, 8 * 4) == 0);
+        CHECK(std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
+        CHECK(std::memcmp(&gpu.crop, &cpu.crop, sizeof(glm::mat4)) == 0);
+        CHECK(gpu.far_distance == cpu.far_distance);
+        // Closed form: the box and the farthest distance from the samples in double precision.
+        const SampleListsCpu original = cpuBuild(setup, light, s, options);
+        CHECK(cpu.samples == original.header.accepted);
+        const glm::dmat4 t_matrix(penumbra::lightTextureMatrix(light.view_projection, options.depth_range));
+        double umin = 1, umax = 0, farthest = -1e30;
+        for (uint32_t id = 0; id < n; ++id) {
+            if (original.sample_slots[id] == penumbra::kSampleListsNoSlot) continue;
+            const glm::dvec3 p(s.positions[id]);
+            const glm::dvec4 t = t_matrix * glm::dvec4(p, 1.0);
+            umin = std::min(umin, t.x / t.w);
+            umax = std::max(umax, t.x / t.w);
+            farthest = std::max(farthest, light.light.w == 0 ? -glm::dot(p, glm::normalize(glm::dvec3(light.light)))
+                                                             : glm::length(p - glm::dvec3(light.light)));
+        }
+        CHECK(cpu.min_uv.x == doctest::Approx(umin).epsilon(1e-5));
+        CHECK(cpu.max_uv.x == doctest::Approx(umax).epsilon(1e-5));
+        CHECK(cpu.far_distance == doctest::Approx(farthest).epsilon(1e-5));
+        CHECK(cpu.max_uv.x - cpu.min_uv.x < 0.6f);  // the samples cover part of the frustum only
+
+        // Rebuild with the fitted frustum: the same samples are accepted (none outside or beyond
+        // far), on the GPU and the CPU, and they fill the fitted grid up to the margin.
+        SampleListsLight fitted = light;
+        fitted.view_projection = gpu.view_projection;
+        const SampleListsCpu cpu_fitted = cpuBuild(setup, fitted, s, options);
+        const SampleListsCpu gpu_fitted = gpuBuild(setup, fitted, s, options);
+        CHECK(penumbra::sampleListsDifference(gpu_fitted, cpu_fitted) == "");
+        CHECK(cpu_fitted.header.accepted == original.header.accepted);
+        size_t lost = 0;
+        for (uint32_t id = 0; id < n; ++id) {
+            lost += (original.sample_slots[id] == penumbra::kSampleListsNoSlot) !=
+                    (cpu_fitted.sample_slots[id] == penumbra::kSampleListsNoSlot);
+        }
+        CHECK(lost == 0);
+        const penumbra::LightFrustumFit refit =
+            penumbra::fitLightFrustumCpu(setup, fitted, s.positions.data(), s.normals.data(), options);
+        CHECK(refit.min_uv.x > 0.0f);
+        CHECK(refit.min_uv.x < 0.01f);
+        CHECK(refit.max_uv.x < 1.0f);
+        CHECK(refit.max_uv.x > 0.99f);
+        CHECK(refit.min_uv.y < 0.01f);
+        CHECK(refit.max_uv.y > 0.99f);
+        CHECK(refit.max_depth < 1.0f);
+        CHECK(refit.max_depth > 0.99f);
+        // The fitted frustum spreads the samples over more lists (§4.3: shorter lists).
+        CHECK(penumbra::sampleListStatisticsCpu(cpu_fitted).occupied_lists >
+              penumbra::sampleListStatisticsCpu(original).occupied_lists);
+    }
+    // Depth input and a single-point box (degenerate): GPU == CPU and the point stays inside.
+    penumbra::SampleListsView view;
+    view.width = 33;
+    view.height = 17;
+    view.inverse_view_projection = glm::inverse(glm::perspective(glm::radians(50.0f), 2.0f, 0.5f, 12.0f) *
+                                                glm::lookAt(glm::vec3(0, 3, 5), glm::vec3(0), glm::vec3(0, 1, 0)));
+    std::vector<float> depth(33 * 17, 1.0f);
+    depth[17 * 5 + 3] = 0.97f;
+    std::vector<glm::vec4> normals(depth.size(), glm::vec4(0, 1, 0, 0));
+    gl::Texture depth_texture(GL_TEXTURE_2D), normal_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(depth_texture.id(), 1, GL_DEPTH_COMPONENT32F, 33, 17);
+    glTextureSubImage2D(depth_texture.id(), 0, 0, 0, 33, 17, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+    glTextureStorage2D(normal_texture.id(), 1, GL_RGBA32F, 33, 17);
+    glTextureSubImage2D(normal_texture.id(), 0, 0, 0, 33, 17, GL_RGBA, GL_FLOAT, normals.data());
+    const SampleListsSetup setup = penumbra::sampleListsSetup(64, 64, depth.size());
+    gl::Buffer header(setup.header_bytes);
+    const penumbra::SampleDepthInput input{depth_texture.id(), normal_texture.id(), view};
+    const auto gpu = builder().fitLightFrustum(setup, pointLight(), input, header.id());
+    const auto cpu = penumbra::fitLightFrustumCpu(setup, pointLight(), view, depth.data(), normals.data());
+    REQUIRE(cpu.valid);
+    CHECK(cpu.samples == 1);
+    CHECK(std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
+    SampleListsLight fitted = pointLight();
+    fitted.view_projection = cpu.view_projection;
+    const SampleListsCpu lists = penumbra::buildSampleListsCpu(setup, fitted, view, depth.data(), normals.data());
+    CHECK(lists.header.accepted == 1);
+    // Centred in the fitted grid: u' = 0.5 up to rounding, so texel 31 or 32 on each axis.
+    const uint32_t texel = lists.sample_texels[17 * 5 + 3];
+    CHECK((texel % 64 == 31 || texel % 64 == 32));
+    CHECK((texel / 64 == 31 || texel / 64 == 32));
+    gl::checkErrors("fit");
+}
+
+TEST_CASE("Fig. 9 statistics: GPU equals CPU equals the closed form") {
+    context();
+    const uint32_t seed = testSeed() + 6;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (auto grid : {std::pair<uint32_t, uint32_t>{1, 1}, {255, 1}, {256, 2}, {129, 257}}) {
+        CAPTURE(grid.first);
+        CAPTURE(grid.second);
+        const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, 40000);
+        const Samples samples = randomSamples(rng, setup.sample_count);
+        GpuLists lists(setup);
+        const SampleListsCpu gpu = gpuBuild(setup, pointLight(), samples, {}, &lists);
+        const SampleListsCpu cpu = cpuBuild(setup, pointLight(), samples, {});
+        REQUIRE(penumbra::sampleListsDifference(gpu, cpu) == "");
+        // Poison the statistics words: the pass must initialise them itself.
+        const uint32_t poison = kPoison;
+        glClearNamedBufferSubData(lists.header.id(), GL_R32UI, 4 * PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 16,
+                                  GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
+        const penumbra::SampleListStatistics on_gpu = builder().statistics(setup, lists.ids());
+        const penumbra::SampleListStatistics on_cpu = penumbra::sampleListStatisticsCpu(cpu);
+        CHECK(on_gpu == on_cpu);
+        // Closed form from the downloaded counts and per-sample codes.
+        uint32_t occupied = 0, longest = 0;
+        uint64_t listed = 0;
+        for (uint32_t c : gpu.counts) {
+            occupied += c != 0;
+            longest = std::max(longest, c);
+            listed += c;
+        }
+        std::array<uint32_t, penumbra::kSampleListsReasonCount> rejected{};
+        uint32_t accepted = 0;
+        for (uint32_t c : gpu.sample_texels) {
+            if (c < penumbra::kSampleListsRejected) ++accepted;
+            else ++rejected[c - penumbra::kSampleListsRejected];
+        }
+        CHECK(on_gpu.lists == setup.lists);
+        CHECK(on_gpu.occupied_lists == occupied);
+        CHECK(on_gpu.max_list_length == longest);
+        CHECK(on_gpu.listed_samples == listed);
+        CHECK(on_gpu.accepted == accepted);
+        CHECK(on_gpu.rejected == rejected);
+        CHECK(on_gpu.rejectedTotal() + on_gpu.accepted == setup.sample_count);
+        CHECK(on_gpu.occupancy() == double(occupied) / setup.lists);
+        CHECK(on_gpu.averageOccupiedLength() == double(listed) / occupied);
+        CHECK(on_gpu.averageLength() == double(listed) / setup.lists);
+        for (uint32_t r = 0; r < penumbra::kSampleListsReasonCount; ++r) {
+            CAPTURE(penumbra::sampleRejectionName(SampleRejection(r)));
+            CHECK(rejected[r] > 0);  // every reason occurs in randomSamples (Depth via the far plane)
+        }
+    }
+    gl::checkErrors("statistics");
+}
+
+TEST_CASE("stress: large random builds equal the CPU twin" * doctest::test_suite("stress")) {
+    context();
+    const uint32_t seed = testSeed() + 7;
+    MESSAGE("seed ", seed);
+    std::mt19937 rng(seed);
+    for (auto grid : {std::pair<uint32_t, uint32_t>{1024, 1024}, {4096, 4096}, {16384, 3}}) {
+        for (const SampleListsLight& light : {pointLight(), directionalLight()}) {
+            const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, 65535u * 256u + 77u);
+            const Samples samples = randomSamples(rng, setup.sample_count);
+            const SampleListsCpu cpu = cpuBuild(setup, light, samples, {});
+            const SampleListsCpu gpu = gpuBuild(setup, light, samples, {});
+            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            checkStructure(setup, gpu, samples.positions.data(), nullptr);
+        }
+    }
+}
+TEST_CASE("a fresh builder, with or without reserve(), builds the same structure") {
+    context();
+    std::mt19937 rng(5);
+    for (int use_reserve = 0; use_reserve < 2; ++use_reserve) {
+        penumbra::SampleListBuilder b;
+        const SampleListsSetup setup = penumbra::sampleListsSetup(32, 32, 1024);
+        if (use_reserve) b.reserve(setup);
+        const Samples samples = randomSamples(rng, setup.sample_count);
+        auto positions = gl::Buffer::fromVector(samples.positions);
+        auto normals = gl::Buffer::fromVector(samples.normals);
+        GpuLists lists(setup);
+        lists.poison();
+        b.build(setup, pointLight(), penumbra::SampleBufferInput{positions.id(), normals.id()}, lists.ids());
+        const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
+        const SampleListsCpu cpu = cpuBuild(setup, pointLight(), samples, {});
+        CAPTURE(use_reserve);
+        CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    }
+}
