@@ -54,7 +54,7 @@ public:
                                 c = mesh.positions[mesh.indices[i + 2]];
                 glm::vec3 n = glm::cross(b - a, c - a);
                 const float len = glm::length(n);
-                faces.emplace_back(len > 0 ? n / len : glm::vec3(0), 0.0f);
+                faces.emplace_back(len > 0 ? n / len : glm::vec3(0), mesh.closed ? 1.0f : 0.0f);
                 for (int k = 0; k < 3; ++k) indices.push_back(base + mesh.indices[i + k]);
             }
             ranges_.push_back(r);
@@ -96,7 +96,7 @@ public:
     GLuint vertexArray() const { return vao_; }
     GLuint vertexBuffer() const { return vertices_.id(); }  ///< interleaved position, normal (6 floats)
     GLuint indexBuffer() const { return indices_.id(); }    ///< uint triangle list, global vertex ids
-    GLuint faceNormalBuffer() const { return face_normals_.id(); }  ///< vec4 per triangle (xyz unit, w 0)
+    GLuint faceNormalBuffer() const { return face_normals_.id(); }  ///< vec4 per triangle (xyz unit, w = 1 closed mesh)
     uint32_t indexCount() const { return index_count_; }
     uint32_t triangleCount() const { return index_count_ / 3; }
     const std::vector<Range>& ranges() const { return ranges_; }
@@ -175,7 +175,12 @@ public:
         program_.use();
         glUniformMatrix4fv(0, 1, GL_FALSE, glm::value_ptr(view_projection));
         glUniform1ui(1, 0u);
+        const glm::dmat4 inverse = glm::inverse(glm::dmat4(view_projection));
+        glUniformMatrix4dv(2, 1, GL_FALSE, glm::value_ptr(inverse));
+        glUniform2f(3, float(width_), float(height_));
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, scene.faceNormalBuffer());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, scene.vertexBuffer());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, scene.indexBuffer());
         scene.draw();
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glViewport(old_viewport[0], old_viewport[1], old_viewport[2], old_viewport[3]);
@@ -193,7 +198,8 @@ public:
     GLuint depthTexture() const { return depth_.id(); }
     /// vec4 per pixel: world position, w = 1 where a surface was hit, 0 for background.
     const gl::Buffer& positionBuffer() const { return positions_; }
-    /// vec4 per pixel: unit face normal facing the camera, w = triangle id (float bits).
+    /// vec4 per pixel: unit face normal (outward for closed meshes, towards the camera for open
+    /// ones), w = triangle id (float bits).
     const gl::Buffer& faceBuffer() const { return faces_; }
 
 private:

@@ -1,0 +1,81 @@
+// penumbra — alias-free hard shadows, light pass, fragment stage (sintorn2008 §3.2, §3.3). One
+// fragment per (caster triangle, light texel it may touch): walk one block of the texel's list of
+// view samples and set the shadow bit of every sample the triangle blocks from the light
+// (atomicOr: the result of all casters is combined, §3.3). No colour output; bind a framebuffer
+// with no attachments of the grid's size.
+// penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=1
+// penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=0 PENUMBRA_AFH_SKIP_SHADOWED=0
+// penumbra-permutation: PENUMBRA_AFH_EXACT=0 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=1 PENUMBRA_AFH_COUNT_WORK=1
+#include "penumbra/alias_free_hard/alias_free_hard_shared.h"
+
+#ifndef PENUMBRA_AFH_COUNT_WORK
+#define PENUMBRA_AFH_COUNT_WORK 0
+#endif
+#ifndef PENUMBRA_CONSERVATIVE_CLIP_TO_BOX
+#define PENUMBRA_CONSERVATIVE_CLIP_TO_BOX 1
+#endif
+#ifndef PENUMBRA_AFH_SKIP_SHADOWED
+#define PENUMBRA_AFH_SKIP_SHADOWED 1
+#endif
+
+layout(std140, binding = PENUMBRA_AFH_PARAMS_BINDING) uniform PenumbraAfhParamsBlock {
+    PenumbraAfhParams penumbraAfhParams;
+};
+layout(std430, binding = PENUMBRA_AFH_COUNTS_BINDING) readonly buffer PenumbraAfhCounts { uint penumbraAfhCounts[]; };
+layout(std430, binding = PENUMBRA_AFH_OFFSETS_BINDING) readonly buffer PenumbraAfhOffsets { uint penumbraAfhOffsets[]; };
+layout(std430, binding = PENUMBRA_AFH_POSITIONS_BINDING) readonly buffer PenumbraAfhPositions { vec4 penumbraAfhPositions[]; };
+layout(std430, binding = PENUMBRA_AFH_SHADOW_BINDING) coherent buffer PenumbraAfhShadow { uint penumbraAfhShadow[]; };
+#if PENUMBRA_AFH_COUNT_WORK
+layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uint penumbraAfhWork[]; };
+#endif
+
+#define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraAfhCounts[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_OFFSET(list) penumbraAfhOffsets[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_POSITION(slot) penumbraAfhPositions[slot]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_ID(slot) 0u
+#define PENUMBRA_SAMPLE_LISTS_GRID_WIDTH penumbraAfhParams.grid.x
+#define PENUMBRA_SAMPLE_LISTS_SHADOW_BITS 1
+#define PENUMBRA_SAMPLE_LISTS_SHADOW_OR(word, mask) atomicOr(penumbraAfhShadow[word], mask)
+#define PENUMBRA_SAMPLE_LISTS_LOAD_SHADOW(word) penumbraAfhShadow[word]
+#include "penumbra/sample_lists/sample_lists.glsl"
+#include "penumbra/sample_lists/shadow_bits.glsl"
+#include "penumbra/conservative_raster/conservative_raster_clip.glsl"
+#include "penumbra/alias_free_hard/blocker_test.glsl"
+
+layout(location = 0) flat in vec3 penumbraAfhVertex0;
+layout(location = 1) flat in vec3 penumbraAfhVertex1;
+layout(location = 2) flat in vec3 penumbraAfhVertex2;
+layout(location = 3) flat in vec4 penumbraAfhBox;
+
+void main() {
+#if PENUMBRA_CONSERVATIVE_CLIP_TO_BOX
+    // Pixels outside the triangle's pixel-expanded bounding box cannot hold a blocked sample.
+    if (!penumbraConservativeInsideBox(gl_FragCoord.xy, penumbraAfhBox)) discard;
+#endif
+    const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
+    const penumbraAfhVec3 a = penumbraAfhVec3(penumbraAfhVertex0);
+    const penumbraAfhVec3 b = penumbraAfhVec3(penumbraAfhVertex1);
+    const penumbraAfhVec3 c = penumbraAfhVec3(penumbraAfhVertex2);
+    const bool point_light = penumbraAfhParams.light.w != 0.0;
+    const penumbraAfhVec3 light = penumbraAfhVec3(penumbraAfhParams.light.xyz);
+    const penumbraAfhReal reach = penumbraAfhReal(penumbraAfhParams.tolerance.z);
+    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.tolerance.x);
+    const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
+    uint tests = 0u;
+    for (uint slot = range.x; slot < range.x + range.y; ++slot) {
+        // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
+#if PENUMBRA_AFH_SKIP_SHADOWED
+        if (penumbraSampleListsShadowBit(slot, 0u)) continue;
+#endif
+        const penumbraAfhVec3 p = penumbraAfhVec3(penumbraSampleListsPosition(slot));
+        // Directional light: the light point on the sample's own ray, `reach` away (exact: the
+        // segment is parallel to the light direction; casters must lie within reach).
+        const penumbraAfhVec3 l = point_light ? light : p + light * reach;
+        ++tests;
+        if (penumbraAfhBlocks(a, b, c, p, l, eps, offset)) penumbraSampleListsSetShadowBit(slot, 0u);
+    }
+#if PENUMBRA_AFH_COUNT_WORK
+    atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], 1u);
+    atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS], tests);
+#endif
+}
