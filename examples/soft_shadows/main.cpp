@@ -5,12 +5,18 @@
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
 //                [--mode reference] [--out FILE.png] [--json] [--no-ground]
 //
-// Mode `reference` (the default, and for now the only one) computes every view sample's light
-// visibility with the exact double-precision oracle (penumbra/reference/visibility.hpp) on the
-// CPU, using the same light samples GPU modes will use; later modes reuse this report format and
-// add their error against it.
+// Modes
+//   reference (default): every view sample's visibility of N light samples from the exact
+//       double-precision oracle (penumbra/reference/visibility.hpp) on the CPU: soft shadows.
+//   hard: the GPU alias-free hard-shadow pipeline (penumbra/pipelines/alias_free_hard.hpp,
+//       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
+//       --reference adds the oracle's verdict for the same samples and light point to the JSON
+//       (mismatched, ties, samples).
+#include <penumbra/gl/headless.hpp>
+#include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
+#include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/image.hpp>
 #include <penumbra/scene/obj.hpp>
 #include <penumbra/scene/scene.hpp>
@@ -24,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -42,14 +49,15 @@ struct Args {
     uint32_t width = 512, height = 384;
     bool json = false;
     bool ground = true;
+    bool reference = false;
 };
 
 [[noreturn]] void usage(const std::string& problem) {
     std::fprintf(stderr,
                  "soft_shadows: %s\n"
                  "usage: soft_shadows [--scene builtin:NAME|PATH.obj] [--light-pos x,y,z] [--light-radius r]\n"
-                 "                    [--samples N] [--width W] [--height H] [--mode reference]\n"
-                 "                    [--out FILE.png] [--json] [--no-ground]\n"
+                 "                    [--samples N] [--width W] [--height H] [--mode reference|hard]\n"
+                 "                    [--reference] [--out FILE.png] [--json] [--no-ground]\n"
                  "built-in scenes: torus_knot columns hairball grass\n",
                  problem.c_str());
     std::exit(2);
@@ -84,6 +92,7 @@ Args parseArgs(int argc, char** argv) {
         else if (arg == "--out") a.out = value();
         else if (arg == "--json") a.json = true;
         else if (arg == "--no-ground") a.ground = false;
+        else if (arg == "--reference") a.reference = true;
         else if (arg == "--samples") a.samples = parseCount(value(), "--samples", 1, 1u << 16);
         else if (arg == "--width") a.width = parseCount(value(), "--width", 1, 16384);
         else if (arg == "--height") a.height = parseCount(value(), "--height", 1, 16384);
@@ -106,7 +115,7 @@ Args parseArgs(int argc, char** argv) {
             usage("unknown argument '" + arg + "'");
         }
     }
-    if (a.mode != "reference") usage("unknown --mode '" + a.mode + "' (available: reference)");
+    if (a.mode != "reference" && a.mode != "hard") usage("unknown --mode '" + a.mode + "' (available: reference, hard)");
     return a;
 }
 
@@ -140,6 +149,141 @@ void parallelFor(size_t n, Body body) {
         });
     }
     for (auto& th : pool) th.join();
+}
+
+
+// --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
+int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+            const std::vector<uint8_t>& material, const glm::dvec3& light_pos, double load_ms,
+            std::chrono::steady_clock::time_point t_start) {
+    auto t0 = std::chrono::steady_clock::now();
+    penumbra::gl::HeadlessContext context;
+    penumbra::scene::GpuScene gpu(scene);
+    const uint32_t w = args.width, h = args.height;
+    penumbra::scene::GBuffer gbuffer(w, h);
+    gbuffer.render(gpu, scene.camera.projection(float(w) / float(h)) * scene.camera.view());
+    const auto positions = gbuffer.positionBuffer().download<glm::vec4>();
+    const auto faces = gbuffer.faceBuffer().download<glm::vec4>();
+    std::vector<float> shading(size_t(w) * h * 4);
+    glGetTextureImage(gbuffer.shadingNormalTexture(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(shading.size() * 4),
+                      shading.data());
+    glFinish();
+    const double gbuffer_ms = msSince(t0);
+
+    // The light must see the view samples: a starting frustum around their box, then §4.3 fitting.
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    size_t view_samples = 0;
+    for (const auto& p : positions) {
+        if (p.w == 0.0f) continue;
+        ++view_samples;
+        lo = glm::min(lo, glm::vec3(p));
+        hi = glm::max(hi, glm::vec3(p));
+    }
+    if (lo.x > hi.x) lo = hi = glm::vec3(0.0f);
+    penumbra::SampleListsLight light;
+    light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
+    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
+    penumbra::AliasFreeHardOptions options;
+    options.grid_width = w;
+    options.grid_height = h;
+    options.count_work = true;
+    penumbra::AliasFreeHardShadows pipeline(options);
+    std::vector<uint8_t> closed;
+    for (const auto& r : gpu.ranges()) closed.insert(closed.end(), r.index_count / 3, r.closed ? 1 : 0);
+    auto draw = [&](penumbra::CasterClass cls) {
+        for (const auto& r : gpu.ranges()) {
+            if (r.closed == (cls == penumbra::CasterClass::Closed)) gpu.draw(r);
+        }
+    };
+    pipeline.run({gbuffer.positionBuffer().id(), gbuffer.faceBuffer().id()}, w * h, light, draw);  // warm-up
+    t0 = std::chrono::steady_clock::now();
+    const penumbra::AliasFreeHardFrame& frame = pipeline.run({gbuffer.positionBuffer().id(), gbuffer.faceBuffer().id()},
+                                                             w * h, light, draw);
+    glFinish();
+    const double shadows_ms = msSince(t0);
+    const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, size_t(w) * h);
+
+    // --reference: the oracle's verdict on the same float samples and light point.
+    size_t tested = 0, mismatched = 0, ties = 0, shadowed = 0;
+    double reference_ms = 0;
+    if (args.reference) {
+        t0 = std::chrono::steady_clock::now();
+        std::vector<glm::dvec3> receivers;
+        std::vector<uint32_t> ids;
+        for (uint32_t i = 0; i < states.size(); ++i) {
+            if (states[i] != PENUMBRA_AFH_LIT && states[i] != PENUMBRA_AFH_SHADOWED) continue;
+            receivers.emplace_back(glm::vec3(positions[i]));
+            ids.push_back(i);
+        }
+        penumbra::reference::VisibilityOptions vo;
+        vo.coplanar_epsilon = options.coplanar_epsilon;
+        const auto result = oracle.evaluate(receivers, {glm::dvec3(glm::vec3(light.light))}, vo);
+        tested = receivers.size();
+        for (size_t r = 0; r < receivers.size(); ++r) {
+            if (result.isTie(r, 0)) {
+                ++ties;
+                continue;
+            }
+            mismatched += (states[ids[r]] == PENUMBRA_AFH_SHADOWED) != result.isBlocked(r, 0);
+        }
+        reference_ms = msSince(t0);
+    }
+
+    // Shade: Lambert with the hard visibility; rows flipped (GL's bottom row first).
+    t0 = std::chrono::steady_clock::now();
+    penumbra::scene::ImageRgb8 image;
+    image.width = w;
+    image.height = h;
+    image.pixels.assign(size_t(w) * h * 3, 0);
+    const glm::vec3 albedo[2] = {{0.75f, 0.75f, 0.72f}, {0.85f, 0.45f, 0.2f}};
+    for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            glm::vec3 c(0.08f, 0.09f, 0.12f);
+            if (positions[i].w != 0.0f) {
+                uint32_t triangle = 0;
+                std::memcpy(&triangle, &faces[i].w, 4);
+                const glm::vec3 n = glm::normalize(glm::vec3(shading[i * 4], shading[i * 4 + 1], shading[i * 4 + 2]));
+                const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(positions[i]));
+                const float lit = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
+                shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
+                c = albedo[triangle < material.size() ? material[triangle] : 1] *
+                    (0.12f + 0.88f * std::max(0.0f, glm::dot(n, l)) * lit);
+            }
+            const size_t o = (size_t(h - 1 - y) * w + x) * 3;
+            for (int k = 0; k < 3; ++k) image.pixels[o + k] = penumbra::scene::linearToSrgb8(c[k]);
+        }
+    }
+    penumbra::scene::writePng(args.out, image);
+    const double shade_ms = msSince(t0);
+    const double total_ms = msSince(t_start);
+    if (args.json) {
+        std::printf(
+            "{\"penumbra_version\":\"%d.%d.%d\",\"scene\":\"%s\",\"mode\":\"hard\",\"renderer\":\"%s\",\"width\":%u,"
+            "\"height\":%u,\"triangles\":%zu,\"view_samples\":%zu,\"light_samples\":1,"
+            "\"light\":{\"position\":[%.9g,%.9g,%.9g],\"radius\":0},"
+            "\"hard\":{\"tested\":%zu,\"shadowed\":%zu,\"passes\":%u,\"max_list_length\":%u,\"occupancy\":%.6f,"
+            "\"fragments\":%llu,\"tests\":%llu,\"triangles_emitted\":%llu}",
+            penumbra::kVersionMajor, penumbra::kVersionMinor, penumbra::kVersionPatch, jsonEscape(args.scene).c_str(),
+            jsonEscape(context.renderer()).c_str(), w, h, oracle.triangleCount(),
+            view_samples, light_pos.x, light_pos.y, light_pos.z,
+            static_cast<size_t>(frame.statistics.listed_samples), shadowed, frame.passes,
+            frame.statistics.max_list_length, frame.statistics.occupancy(),
+            static_cast<unsigned long long>(frame.fragments), static_cast<unsigned long long>(frame.tests),
+            static_cast<unsigned long long>(frame.triangles_emitted));
+        if (args.reference) {
+            std::printf(",\"reference\":{\"samples\":%zu,\"mismatched\":%zu,\"ties\":%zu}", tested, mismatched, ties);
+        }
+        std::printf(",\"timings_ms\":{\"load\":%.3f,\"gbuffer\":%.3f,\"shadows\":%.3f,\"reference\":%.3f,"
+                    "\"shade_and_write\":%.3f,\"total\":%.3f},\"out\":\"%s\"}\n",
+                    load_ms, gbuffer_ms, shadows_ms, reference_ms, shade_ms, total_ms, jsonEscape(args.out).c_str());
+    } else {
+        std::printf("%s (hard, %s): %zu triangles, %zu samples tested, %zu shadowed, %.1f ms shadows -> %s\n",
+                    args.scene.c_str(), context.renderer().c_str(), oracle.triangleCount(),
+                    static_cast<size_t>(frame.statistics.listed_samples), shadowed, shadows_ms, args.out.c_str());
+        if (args.reference) std::printf("reference: %zu mismatched, %zu ties of %zu\n", mismatched, ties, tested);
+    }
+    return 0;
 }
 
 }  // namespace
@@ -182,6 +326,7 @@ int main(int argc, char** argv) {
 
         glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
         double light_radius = args.light_radius >= 0 ? args.light_radius : scene.light.radius;
+        if (args.mode == "hard") return runHard(args, scene, oracle, material, light_pos, load_ms, t_start);
         const std::vector<glm::dvec3> light_samples =
             penumbra::reference::sphereLightSamples(light_pos, light_radius, args.samples, 1);
 

@@ -73,7 +73,7 @@ struct AliasFreeHardOptions {
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H (sintorn2008 uses the view size)
     ConservativeVariant variant = ConservativeVariant::Fixed6;
     AfhPrecision precision = AfhPrecision::Exact;
-    double coplanar_epsilon = 1e-6;  ///< the oracle's coplanar rule (relative); above view-sample float noise
+    double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise
     float sample_offset = 0.0f;      ///< world units; see the summary (0 = exact geometry)
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
     bool fit_frustum = true;         ///< §4.3
