@@ -274,16 +274,22 @@ TEST_CASE("0 mismatches against the oracle on every scene with three point light
         MESSAGE("skipping spot.obj: ", spot, " is absent");
     }
     // PENUMBRA_AFH_SIZE overrides the view size (e.g. 512 for the issue's larger check).
+    // PENUMBRA_AFH_SIZE=W or WxH overrides the 256x256 view (e.g. 512x384, the demo's size).
     const char* size_env = std::getenv("PENUMBRA_AFH_SIZE");
-    const uint32_t size = size_env ? static_cast<uint32_t>(std::strtoul(size_env, nullptr, 10)) : 256;
+    uint32_t size = 256, height = 256;
+    if (size_env) {
+        char* end = nullptr;
+        size = height = static_cast<uint32_t>(std::strtoul(size_env, &end, 10));
+        if (end && *end == 'x') height = static_cast<uint32_t>(std::strtoul(end + 1, nullptr, 10));
+    }
     for (auto& [name, scene] : scenes) {
-        Fixture f(scene, size, size);
+        Fixture f(scene, size, height);
         for (const auto& position : lightPositions(f.scene)) {
             CAPTURE(name);
             const auto light = pointLight(f, position);
             penumbra::AliasFreeHardOptions o;
             o.grid_width = size;
-            o.grid_height = size;
+            o.grid_height = height;
             penumbra::AliasFreeHardShadows pipeline(o);
             pipeline.run(f.input(), f.samples(), light, f.drawer());
             const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
@@ -291,11 +297,34 @@ TEST_CASE("0 mismatches against the oracle on every scene with three point light
             MESSAGE(name, " light (", position.x, ", ", position.y, ", ", position.z, "): ", c.tested, " samples, ",
                     c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties, " (back-facing ",
                     c.back_facing, ", untested ", c.untested, ")");
-            CHECK(c.tested > size * size / 8);
+            CHECK(c.tested > size * height / 8);
             CHECK(c.untested == 0);
             CHECK(c.mismatched == 0);
             CHECK(double(c.ties) < 1e-4 * double(c.tested));
         }
+    }
+}
+
+TEST_CASE("closed casters with every face cast equal the oracle too, at the demo's 512x384") {
+    context();
+    Fixture f(penumbra::scene::builtin("torus_knot"), 512, 384);
+    const auto light = pointLight(f, f.scene.light.position);
+    for (bool back_faces_only : {true, false}) {
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 512;
+        o.grid_height = 384;
+        o.back_faces_only = back_faces_only;
+        o.count_work = true;
+        penumbra::AliasFreeHardShadows pipeline(o);
+        const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
+        const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
+        const Comparison c = compareWithOracle(f, light, states, o.coplanar_epsilon, 0.0f);
+        MESSAGE("torus_knot 512x384, back_faces_only=", back_faces_only, ": ", c.tested, " samples, mismatched ",
+                c.mismatched, ", ties ", c.ties, ", triangles emitted ", frame.triangles_emitted);
+        // §3.3 (back faces only) misses samples exactly in concave creases lit at a grazing angle:
+        // reported, bounded; casting every face of closed meshes removes them.
+        if (back_faces_only) CHECK(double(c.mismatched) <= 1e-4 * double(c.tested));
+        else CHECK(c.mismatched == 0);
     }
 }
 

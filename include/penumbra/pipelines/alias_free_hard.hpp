@@ -73,7 +73,7 @@ struct AliasFreeHardOptions {
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H (sintorn2008 uses the view size)
     ConservativeVariant variant = ConservativeVariant::Fixed6;
     AfhPrecision precision = AfhPrecision::Exact;
-    double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise
+    double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise (~1 ulp)
     float sample_offset = 0.0f;      ///< world units; see the summary (0 = exact geometry)
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
     bool fit_frustum = true;         ///< §4.3
@@ -83,6 +83,13 @@ struct AliasFreeHardOptions {
     // caster already shadowed; fragments outside the triangle's pixel-expanded box are discarded.
     bool skip_shadowed = true;
     bool clip_to_box = true;
+    /// §3.3: closed casters cast only their light-back-facing triangles (half the work). Exact for
+    /// every sample outside a closed mesh; a sample lying exactly in a concave crease of a closed
+    /// surface, lit at a grazing angle that enters the solid right at the sample, is missed (the
+    /// entry is at the segment's excluded endpoint; measured: 1 of 150 209 samples of the torus
+    /// knot at 512x384, 0 in the 256x256 and 512x512 oracle checks). false: closed casters cast
+    /// every triangle like open ones, which equals the oracle there too.
+    bool back_faces_only = true;
 };
 
 /// What one run did.
@@ -216,6 +223,39 @@ Real afhDet(const glm::tvec3<Real>& u, const glm::tvec3<Real>& v, const glm::tve
     return cx * w.x + cy * w.y + cz * w.z;
 }
 
+template <typename Real>
+Real afhPointTriangleDistance2(const glm::tvec3<Real>& p, const glm::tvec3<Real>& a, const glm::tvec3<Real>& b,
+                               const glm::tvec3<Real>& c) {
+    using V = glm::tvec3<Real>;
+    const V ab = b - a, ac = c - a, ap = p - a;
+    const Real d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    V q;
+    if (d1 <= 0 && d2 <= 0) {
+        q = a;
+    } else {
+        const V bp = p - b, cp = p - c;
+        const Real d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp), d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+        const Real vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+        if (d3 >= 0 && d4 <= d3) {
+            q = b;
+        } else if (d6 >= 0 && d5 <= d6) {
+            q = c;
+        } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+            q = a + ab * (d1 / (d1 - d3));
+        } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+            q = a + ac * (d2 / (d2 - d6));
+        } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        } else {
+            const Real denom = va + vb + vc;
+            if (!(denom > 0)) return glm::dot(ap, ap);
+            q = a + ab * (vb / denom) + ac * (vc / denom);
+        }
+    }
+    const V d = p - q;
+    return glm::dot(d, d);
+}
+
 }  // namespace detail
 
 /// The blocker test of blocker_test.glsl, same operations in the same order (Real = double for
@@ -236,7 +276,8 @@ bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::
                                 std::max(detail::afhMaxAbs<Real>(c - p), detail::afhMaxAbs<Real>(l - p)));
     const Real tol = coplanar_epsilon * scale;
     const Real threshold = tol * tol * nn;
-    if (dp * dp <= threshold || dl * dl <= threshold) return false;
+    if (dp * dp <= threshold && detail::afhPointTriangleDistance2<Real>(p, a, b, c) <= tol * tol) return false;
+    if (dl * dl <= threshold && detail::afhPointTriangleDistance2<Real>(l, a, b, c) <= tol * tol) return false;
     if (offset > 0 && dp * dp <= offset * offset * nn) return false;
     const glm::tvec3<Real> la = a - l, lb = b - l, lc = c - l, lp = p - l;
     const Real e0 = detail::afhDet(la, lb, lp), e1 = detail::afhDet(lb, lc, lp), e2 = detail::afhDet(lc, la, lp);
@@ -279,7 +320,7 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
     const auto& I = *casters.indices;
     for (size_t t = 0; t < casters.closed->size(); ++t) {
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
-        if ((*casters.closed)[t]) {
+        if ((*casters.closed)[t] && options.back_faces_only) {
             const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
             const glm::dvec3 to_light = point ? lpos - a : lpos;
             if (glm::dot(glm::cross(b - a, c - a), to_light) >= 0.0) continue;
@@ -420,8 +461,8 @@ public:
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_WORK_BINDING, work_.id());
         for (uint32_t block = 0; block < frame_.passes; ++block) {
             for (CasterClass cls : {CasterClass::Closed, CasterClass::Open}) {
-                const AfhParams params =
-                    afhParams(options_, light.light, block, cls == CasterClass::Closed ? PENUMBRA_AFH_FLAG_CLOSED : 0u);
+                const bool cull = cls == CasterClass::Closed && options_.back_faces_only;
+                const AfhParams params = afhParams(options_, light.light, block, cull ? PENUMBRA_AFH_FLAG_CLOSED : 0u);
                 glNamedBufferSubData(afh_params_.id(), 0, sizeof params, &params);
                 light_pass_.use();
                 draw_casters(cls);

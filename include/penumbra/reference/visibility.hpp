@@ -39,15 +39,18 @@
 //     t = T / det as in the paper, and hit(T) = 0 < t < 1.
 //  2. Coplanar rule. Let n = (v1 - v0) x (v2 - v0) and
 //         scale = max(|v0 - p|_inf, |v1 - p|_inf, |v2 - p|_inf, |s - p|_inf).
-//     If the distance from p to T's plane is <= coplanar_epsilon * scale, T is IGNORED for this
-//     pair (no hit, no tie), and likewise for the distance from s. In exact arithmetic a triangle
-//     whose plane contains p (or s) can only touch the segment at that endpoint, which is excluded
-//     anyway, so the rule only removes rounding noise: a receiver lying on a surface is never
-//     shadowed by the triangle it lies on nor by its coplanar neighbours (even exactly on their
-//     shared edges and vertices), and light samples lying on an emitter that is part of the mesh
-//     are not blocked by it. A receiver on a surface whose light is BEHIND that surface is
-//     therefore not blocked by the surface itself; light-back-facing shading darkens it anyway
-//     (sintorn2008 §3.3, BLOCKS.md "Skip what a scene doesn't need").
+//     If the distance from p to the closed triangle T itself is <= coplanar_epsilon * scale, T is
+//     IGNORED for this pair (no hit, no tie), and likewise for the distance from s. In exact
+//     arithmetic a triangle containing p (or s) can only touch the segment at that endpoint, which
+//     is excluded anyway, so the rule only removes rounding noise: a receiver lying on a surface
+//     is never shadowed by the triangle it lies on nor by the neighbours whose edges or vertices
+//     it lies on, and light samples lying on an emitter that is part of the mesh are not blocked
+//     by it. The distance is to the TRIANGLE, not to its plane: near a terminator a receiver can
+//     be within rounding of a neighbour's plane while the segment, at a grazing angle, meets that
+//     neighbour far away; that crossing is real and counts. (The plane distance, a lower bound, is
+//     checked first.) A receiver on a surface whose light is BEHIND that surface is therefore not
+//     blocked by the surface itself; light-back-facing shading darkens it anyway (BLOCKS.md
+//     §3.3/§4.3).
 //  3. Ties. T is FRAGILE for the pair when any of:
 //       a) the line passes through T and |t| <= tie_epsilon or |t - 1| <= tie_epsilon;
 //       b) the line passes within tie_epsilon * scale of an edge of T (end vertices included),
@@ -337,6 +340,41 @@ inline SegmentQuery makeSegmentQuery(const glm::dvec3& receiver, const glm::dvec
     return query;
 }
 
+/// Squared distance from p to the closed triangle (a, b, c): closest point by Voronoi regions
+/// (Ericson, Real-Time Collision Detection, 5.1.5).
+inline double pointTriangleDistance2(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
+                                     const glm::dvec3& c) {
+    const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    glm::dvec3 q;
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        q = a;
+    } else {
+        const glm::dvec3 bp = p - b;
+        const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+        const glm::dvec3 cp = p - c;
+        const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+        const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+        if (d3 >= 0.0 && d4 <= d3) {
+            q = b;
+        } else if (d6 >= 0.0 && d5 <= d6) {
+            q = c;
+        } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+            q = a + ab * (d1 / (d1 - d3));
+        } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+            q = a + ac * (d2 / (d2 - d6));
+        } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        } else {
+            const double denom = va + vb + vc;
+            if (!(denom > 0.0)) return glm::dot(ap, ap);  // degenerate: never dropped here anyway
+            q = a + ab * (vb / denom) + ac * (vc / denom);
+        }
+    }
+    const glm::dvec3 d = p - q;
+    return glm::dot(d, d);
+}
+
 /// Rules 1-4 for one triangle and one segment (see the header comment).
 inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     const Ray& ray = query.ray;
@@ -374,10 +412,13 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
 
     // Rule 2 (coplanar) and rule 3c (plane sides), on the caller's absolute coordinates.
     const glm::dvec3 n = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
-    const double limit = query.coplanar_epsilon * scale * glm::length(n);
+    const double reach = query.coplanar_epsilon * scale;
+    const double limit = reach * glm::length(n);
     const double side_p = glm::dot(n, tri.v0 - ray.origin);
     const double side_s = glm::dot(n, tri.v0 - ray.end);
-    if (std::fabs(side_p) <= limit || std::fabs(side_s) <= limit) return {};
+    // The plane distance is a cheap lower bound of the distance to the triangle itself.
+    if (std::fabs(side_p) <= limit && pointTriangleDistance2(ray.origin, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
+    if (std::fabs(side_s) <= limit && pointTriangleDistance2(ray.end, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
     if (inside && ((side_p > 0.0) != (side_s > 0.0)) != verdict.hit) verdict.fragile = true;
     if (!verdict.hit && !verdict.fragile) return {};
 

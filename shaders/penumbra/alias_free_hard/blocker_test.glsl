@@ -4,9 +4,11 @@
 // (include/penumbra/reference/visibility.hpp) on every pair the oracle does not flag as a tie:
 //
 //   n  = (b - a) x (c - a);  d_p = n.(p - a),  d_l = n.(l - a)        (supporting plane)
-//   coplanar rule (oracle rule 2): ignore the triangle when |d_p| or |d_l| <= eps * scale * |n|,
+//   coplanar rule (oracle rule 2): ignore the triangle when p (or l) lies within eps * scale of
+//       the triangle itself (plane distance |d_p| <= eps * scale * |n| checked first as a bound),
 //       scale = max(|a - p|inf, |b - p|inf, |c - p|inf, |l - p|inf): a sample lying on a surface
-//       is never shadowed by that surface or its coplanar neighbours, with no depth bias;
+//       is never shadowed by that surface or the neighbours it touches, with no depth bias, while
+//       a grazing crossing of a neighbour near the terminator still counts;
 //   p and l strictly on opposite sides (and |d_p| > offset * |n|, the optional sample offset);
 //   edge planes through l: e_i = det(v_i - l, v_i+1 - l, p - l) all >= 0 or all <= 0, not all 0
 //       (the line from l through p meets the closed triangle).
@@ -45,6 +47,39 @@ penumbraAfhReal penumbraAfhDet(penumbraAfhVec3 u, penumbraAfhVec3 v, penumbraAfh
     return r;
 }
 
+// Squared distance from p to the closed triangle (a, b, c): closest point by Voronoi regions
+// (Ericson, Real-Time Collision Detection, 5.1.5); the host twin is
+// penumbra::detail::afhPointTriangleDistance2 and the oracle's pointTriangleDistance2.
+penumbraAfhReal penumbraAfhPointTriangleDistance2(penumbraAfhVec3 p, penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c) {
+    precise penumbraAfhVec3 ab = b - a, ac = c - a, ap = p - a;
+    precise penumbraAfhReal d1 = dot(ab, ap), d2 = dot(ac, ap);
+    penumbraAfhVec3 q;
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        q = a;
+    } else {
+        precise penumbraAfhVec3 bp = p - b, cp = p - c;
+        precise penumbraAfhReal d3 = dot(ab, bp), d4 = dot(ac, bp), d5 = dot(ab, cp), d6 = dot(ac, cp);
+        precise penumbraAfhReal vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+        if (d3 >= 0.0 && d4 <= d3) {
+            q = b;
+        } else if (d6 >= 0.0 && d5 <= d6) {
+            q = c;
+        } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+            q = a + ab * (d1 / (d1 - d3));
+        } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+            q = a + ac * (d2 / (d2 - d6));
+        } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        } else {
+            precise penumbraAfhReal denom = va + vb + vc;
+            if (!(denom > 0.0)) return dot(ap, ap);
+            q = a + ab * (vb / denom) + ac * (vc / denom);
+        }
+    }
+    precise penumbraAfhVec3 d = p - q;
+    return dot(d, d);
+}
+
 bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, penumbraAfhVec3 p,
                        penumbraAfhVec3 l, penumbraAfhReal coplanar_epsilon, penumbraAfhReal offset) {
     precise penumbraAfhVec3 ab = b - a;
@@ -63,7 +98,9 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
         max(max(penumbraAfhMaxAbs(a - p), penumbraAfhMaxAbs(b - p)), max(penumbraAfhMaxAbs(c - p), penumbraAfhMaxAbs(l - p)));
     precise penumbraAfhReal tol = coplanar_epsilon * scale;
     precise penumbraAfhReal threshold = tol * tol * nn;
-    if (dp * dp <= threshold || dl * dl <= threshold) return false;
+    // Plane distance first (cheap lower bound), then the distance to the triangle itself.
+    if (dp * dp <= threshold && penumbraAfhPointTriangleDistance2(p, a, b, c) <= tol * tol) return false;
+    if (dl * dl <= threshold && penumbraAfhPointTriangleDistance2(l, a, b, c) <= tol * tol) return false;
     if (offset > 0.0 && dp * dp <= offset * offset * nn) return false;
     precise penumbraAfhVec3 la = a - l;
     precise penumbraAfhVec3 lb = b - l;
