@@ -48,6 +48,7 @@
 #include <penumbra/alias_free_hard/alias_free_hard_shared.h>
 
 #include "penumbra/conservative_raster.hpp"
+#include "penumbra/detail/geometry.hpp"
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/shader.hpp"
 #include "penumbra/sample_lists.hpp"
@@ -223,39 +224,6 @@ Real afhDet(const glm::tvec3<Real>& u, const glm::tvec3<Real>& v, const glm::tve
     return cx * w.x + cy * w.y + cz * w.z;
 }
 
-template <typename Real>
-Real afhPointTriangleDistance2(const glm::tvec3<Real>& p, const glm::tvec3<Real>& a, const glm::tvec3<Real>& b,
-                               const glm::tvec3<Real>& c) {
-    using V = glm::tvec3<Real>;
-    const V ab = b - a, ac = c - a, ap = p - a;
-    const Real d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-    V q;
-    if (d1 <= 0 && d2 <= 0) {
-        q = a;
-    } else {
-        const V bp = p - b, cp = p - c;
-        const Real d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp), d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-        const Real vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-        if (d3 >= 0 && d4 <= d3) {
-            q = b;
-        } else if (d6 >= 0 && d5 <= d6) {
-            q = c;
-        } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-            q = a + ab * (d1 / (d1 - d3));
-        } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-            q = a + ac * (d2 / (d2 - d6));
-        } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-        } else {
-            const Real denom = va + vb + vc;
-            if (!(denom > 0)) return glm::dot(ap, ap);
-            q = a + ab * (vb / denom) + ac * (vc / denom);
-        }
-    }
-    const V d = p - q;
-    return glm::dot(d, d);
-}
-
 }  // namespace detail
 
 /// The blocker test of blocker_test.glsl, same operations in the same order (Real = double for
@@ -276,8 +244,8 @@ bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::
                                 std::max(detail::afhMaxAbs<Real>(c - p), detail::afhMaxAbs<Real>(l - p)));
     const Real tol = coplanar_epsilon * scale;
     const Real threshold = tol * tol * nn;
-    if (dp * dp <= threshold && detail::afhPointTriangleDistance2<Real>(p, a, b, c) <= tol * tol) return false;
-    if (dl * dl <= threshold && detail::afhPointTriangleDistance2<Real>(l, a, b, c) <= tol * tol) return false;
+    if (dp * dp <= threshold && detail::pointTriangleDistance2<Real>(p, a, b, c) <= tol * tol) return false;
+    if (dl * dl <= threshold && detail::pointTriangleDistance2<Real>(l, a, b, c) <= tol * tol) return false;
     if (offset > 0 && dp * dp <= offset * offset * nn) return false;
     const glm::tvec3<Real> la = a - l, lb = b - l, lc = c - l, lp = p - l;
     const Real e0 = detail::afhDet(la, lb, lp), e1 = detail::afhDet(lb, lc, lp), e2 = detail::afhDet(lc, la, lp);

@@ -110,6 +110,7 @@
 #ifndef PENUMBRA_REFERENCE_VISIBILITY_HPP
 #define PENUMBRA_REFERENCE_VISIBILITY_HPP
 
+#include <penumbra/detail/geometry.hpp>
 #include <penumbra/error.hpp>
 
 #include <glm/common.hpp>
@@ -340,41 +341,6 @@ inline SegmentQuery makeSegmentQuery(const glm::dvec3& receiver, const glm::dvec
     return query;
 }
 
-/// Squared distance from p to the closed triangle (a, b, c): closest point by Voronoi regions
-/// (Ericson, Real-Time Collision Detection, 5.1.5).
-inline double pointTriangleDistance2(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                                     const glm::dvec3& c) {
-    const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-    glm::dvec3 q;
-    if (d1 <= 0.0 && d2 <= 0.0) {
-        q = a;
-    } else {
-        const glm::dvec3 bp = p - b;
-        const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-        const glm::dvec3 cp = p - c;
-        const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-        const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-        if (d3 >= 0.0 && d4 <= d3) {
-            q = b;
-        } else if (d6 >= 0.0 && d5 <= d6) {
-            q = c;
-        } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-            q = a + ab * (d1 / (d1 - d3));
-        } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-            q = a + ac * (d2 / (d2 - d6));
-        } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-        } else {
-            const double denom = va + vb + vc;
-            if (!(denom > 0.0)) return glm::dot(ap, ap);  // degenerate: never dropped here anyway
-            q = a + ab * (vb / denom) + ac * (vc / denom);
-        }
-    }
-    const glm::dvec3 d = p - q;
-    return glm::dot(d, d);
-}
-
 /// Rules 1-4 for one triangle and one segment (see the header comment).
 inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     const Ray& ray = query.ray;
@@ -417,8 +383,8 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     const double side_p = glm::dot(n, tri.v0 - ray.origin);
     const double side_s = glm::dot(n, tri.v0 - ray.end);
     // The plane distance is a cheap lower bound of the distance to the triangle itself.
-    if (std::fabs(side_p) <= limit && pointTriangleDistance2(ray.origin, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
-    if (std::fabs(side_s) <= limit && pointTriangleDistance2(ray.end, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
+    if (std::fabs(side_p) <= limit && penumbra::detail::pointTriangleDistance2<double>(ray.origin, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
+    if (std::fabs(side_s) <= limit && penumbra::detail::pointTriangleDistance2<double>(ray.end, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
     if (inside && ((side_p > 0.0) != (side_s > 0.0)) != verdict.hit) verdict.fragile = true;
     if (!verdict.hit && !verdict.fragile) return {};
 

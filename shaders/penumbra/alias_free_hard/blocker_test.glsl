@@ -49,7 +49,8 @@ penumbraAfhReal penumbraAfhDet(penumbraAfhVec3 u, penumbraAfhVec3 v, penumbraAfh
 
 // Squared distance from p to the closed triangle (a, b, c): closest point by Voronoi regions
 // (Ericson, Real-Time Collision Detection, 5.1.5); the host twin is
-// penumbra::detail::afhPointTriangleDistance2 and the oracle's pointTriangleDistance2.
+// penumbra::detail::pointTriangleDistance2 (include/penumbra/detail/geometry.hpp), which the
+// oracle uses too.
 penumbraAfhReal penumbraAfhPointTriangleDistance2(penumbraAfhVec3 p, penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c) {
     precise penumbraAfhVec3 ab = b - a, ac = c - a, ap = p - a;
     precise penumbraAfhReal d1 = dot(ab, ap), d2 = dot(ac, ap);
