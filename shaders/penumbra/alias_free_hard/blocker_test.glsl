@@ -54,30 +54,29 @@ penumbraAfhReal penumbraAfhDet(penumbraAfhVec3 u, penumbraAfhVec3 v, penumbraAfh
 penumbraAfhReal penumbraAfhPointTriangleDistance2(penumbraAfhVec3 p, penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c) {
     precise penumbraAfhVec3 ab = b - a, ac = c - a, ap = p - a;
     precise penumbraAfhReal d1 = dot(ab, ap), d2 = dot(ac, ap);
-    penumbraAfhVec3 q;
+    penumbraAfhVec3 d;
     if (d1 <= 0.0 && d2 <= 0.0) {
-        q = a;
+        d = ap;
     } else {
         precise penumbraAfhVec3 bp = p - b, cp = p - c;
         precise penumbraAfhReal d3 = dot(ab, bp), d4 = dot(ac, bp), d5 = dot(ab, cp), d6 = dot(ac, cp);
         precise penumbraAfhReal vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
         if (d3 >= 0.0 && d4 <= d3) {
-            q = b;
+            d = bp;
         } else if (d6 >= 0.0 && d5 <= d6) {
-            q = c;
+            d = cp;
         } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-            q = a + ab * (d1 / (d1 - d3));
+            d = ap - ab * (d1 / (d1 - d3));
         } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-            q = a + ac * (d2 / (d2 - d6));
+            d = ap - ac * (d2 / (d2 - d6));
         } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+            d = bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
         } else {
             precise penumbraAfhReal denom = va + vb + vc;
             if (!(denom > 0.0)) return dot(ap, ap);
-            q = a + ab * (vb / denom) + ac * (vc / denom);
+            d = ap - ab * (vb / denom) - ac * (vc / denom);
         }
     }
-    precise penumbraAfhVec3 d = p - q;
     return dot(d, d);
 }
 
