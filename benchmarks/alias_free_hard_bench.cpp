@@ -83,14 +83,7 @@ std::vector<std::string> sceneNames() {
     return names;
 }
 
-template <typename F>
-double timeGpu(F&& f) {
-    glFinish();
-    const auto start = std::chrono::steady_clock::now();
-    f();
-    glFinish();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using penumbra::bench::timeGpu;
 
 struct Comparison {
     size_t samples = 0, ties = 0, mismatched = 0, untested = 0;
@@ -118,12 +111,7 @@ struct Fixture {
         gbuffer = std::make_unique<penumbra::scene::GBuffer>(w, w);
         gbuffer->render(*gpu, scene.camera.projection(1.0f) * scene.camera.view());
         positions = gbuffer->positionBuffer().download<glm::vec4>();
-        glm::vec3 lo(1e30f), hi(-1e30f);
-        for (const auto& p : positions) {
-            if (p.w == 0.0f) continue;
-            lo = glm::min(lo, glm::vec3(p));
-            hi = glm::max(hi, glm::vec3(p));
-        }
+        const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), positions.size());
         light.light = glm::vec4(scene.light.position, 1.0f);
         light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
 

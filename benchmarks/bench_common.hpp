@@ -6,6 +6,7 @@
 
 #include <penumbra/gl/headless.hpp>
 
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 
@@ -20,6 +21,17 @@ inline gl::HeadlessContext& glContext() {
 inline bool smokeRun() {
     const char* env = std::getenv("PENUMBRA_BENCH_SMOKE");
     return env && std::strcmp(env, "1") == 0;
+}
+
+/// Seconds between a glFinish before and after `f`: wall-clock GPU time. llvmpipe answers
+/// GL_TIME_ELAPSED queries with 1 ns, so benchmarks that must run there time this way.
+template <typename F>
+double timeGpu(F&& f) {
+    glFinish();
+    const auto start = std::chrono::steady_clock::now();
+    f();
+    glFinish();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace penumbra::bench

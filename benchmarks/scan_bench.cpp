@@ -32,14 +32,7 @@ std::vector<uint32_t> benchValues(size_t n) {
     return v;
 }
 
-template <typename F>
-double timeGpu(F&& f) {
-    glFinish();
-    const auto start = std::chrono::steady_clock::now();
-    f();
-    glFinish();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using penumbra::bench::timeGpu;
 
 void setRates(benchmark::State& state, uint64_t n) {
     state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * n * 8));  // -> bytes_per_second

@@ -61,19 +61,8 @@ struct Fixture {
     penumbra::AfhCasters casters() const { return {&gpu->positions(), &gpu->indices(), &closed_per_triangle}; }
 };
 
-// The box of the view samples (what the light must see), as an engine would take from its view.
-std::pair<glm::vec3, glm::vec3> sampleBounds(const Fixture& f) {
-    glm::vec3 lo(1e30f), hi(-1e30f);
-    for (const auto& p : f.positions) {
-        if (p.w == 0.0f) continue;
-        lo = glm::min(lo, glm::vec3(p));
-        hi = glm::max(hi, glm::vec3(p));
-    }
-    return {lo, hi};
-}
-
 penumbra::SampleListsLight pointLight(const Fixture& f, const glm::vec3& position) {
-    const auto [lo, hi] = sampleBounds(f);
+    const auto [lo, hi] = penumbra::viewSampleBounds(f.positions.data(), f.positions.size());
     penumbra::SampleListsLight light;
     light.light = glm::vec4(position, 1.0f);
     light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
@@ -391,6 +380,15 @@ TEST_CASE("work counters and zero samples") {
     CHECK(frame.triangles_emitted < f.gpu->triangleCount());  // closed torus knot: front faces culled (§3.3)
     const auto& empty = pipeline.run(f.input(), 0, light, f.drawer());
     CHECK(empty.passes == 0);
+    // The view-sample box skips "no sample" entries (w == 0) and counts the others.
+    const std::vector<glm::vec4> some = {{1, 2, 3, 1}, {9, 9, 9, 0}, {-1, 5, 0, 1}};
+    size_t counted = 0;
+    const auto [lo, hi] = penumbra::viewSampleBounds(some.data(), some.size(), &counted);
+    CHECK(counted == 2);
+    CHECK(lo == glm::vec3(-1, 2, 0));
+    CHECK(hi == glm::vec3(1, 5, 3));
+    CHECK(penumbra::viewSampleBounds(some.data(), 0, &counted).first == glm::vec3(0));
+    CHECK(counted == 0);
 }
 
 TEST_CASE("bad input is a clear error") {

@@ -171,15 +171,8 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     const double gbuffer_ms = msSince(t0);
 
     // The light must see the view samples: a starting frustum around their box, then §4.3 fitting.
-    glm::vec3 lo(1e30f), hi(-1e30f);
     size_t view_samples = 0;
-    for (const auto& p : positions) {
-        if (p.w == 0.0f) continue;
-        ++view_samples;
-        lo = glm::min(lo, glm::vec3(p));
-        hi = glm::max(hi, glm::vec3(p));
-    }
-    if (lo.x > hi.x) lo = hi = glm::vec3(0.0f);
+    const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), positions.size(), &view_samples);
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
     light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);

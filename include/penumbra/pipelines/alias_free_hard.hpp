@@ -59,6 +59,8 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <utility>
 #include <vector>
 
 namespace penumbra {
@@ -104,6 +106,22 @@ struct AliasFreeHardFrame {
 
 // ---------------------------------------------------------------------------------------------
 // Pure setup
+
+/// The box of the view samples a light must see: positions with w != 0 (w == 0 marks "no
+/// sample"). `count` returns how many there were; with none the box is the point (0, 0, 0).
+inline std::pair<glm::vec3, glm::vec3> viewSampleBounds(const glm::vec4* positions, size_t n, size_t* count = nullptr) {
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    size_t samples = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (positions[i].w == 0.0f) continue;
+        ++samples;
+        lo = glm::min(lo, glm::vec3(positions[i]));
+        hi = glm::max(hi, glm::vec3(positions[i]));
+    }
+    if (count) *count = samples;
+    if (samples == 0) lo = hi = glm::vec3(0.0f);
+    return {lo, hi};
+}
 
 /// A starting light view-projection seeing the box [lo, hi] (pass the bounds of the view samples,
 /// not of the whole scene: a large ground plane would put the light "inside"). Point light
@@ -356,7 +374,7 @@ public:
 
     explicit AliasFreeHardShadows(const AliasFreeHardOptions& options,
                                   const ShaderLibrary& library = ShaderLibrary::embedded())
-        : options_(options), library_(&library), builder_(library) {
+        : options_(options), builder_(library) {
         validateAliasFreeHardOptions(options_, glm::vec4(0, 0, 0, 1));
         conservative_ = afhConservativeSetup(options_);
         ShaderDefines defines = conservative_.defines;
@@ -374,16 +392,14 @@ public:
         glCreateFramebuffers(1, &framebuffer_);
         glNamedFramebufferParameteri(framebuffer_, GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
         glNamedFramebufferParameteri(framebuffer_, GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
-        glCreateVertexArrays(1, &empty_vao_);
         gl::checkErrors("penumbra::AliasFreeHardShadows");
     }
-    // Owns raw GL names (framebuffer, VAO): not movable; hold it in a std::unique_ptr to move it.
+    // Owns a raw GL name (framebuffer): not movable; hold it in a std::unique_ptr to move it.
     AliasFreeHardShadows(AliasFreeHardShadows&&) = delete;
     AliasFreeHardShadows(const AliasFreeHardShadows&) = delete;
     AliasFreeHardShadows& operator=(const AliasFreeHardShadows&) = delete;
     ~AliasFreeHardShadows() {
         if (framebuffer_) glDeleteFramebuffers(1, &framebuffer_);
-        if (empty_vao_) glDeleteVertexArrays(1, &empty_vao_);
     }
 
     const AliasFreeHardOptions& options() const { return options_; }
@@ -473,14 +489,13 @@ public:
 
 private:
     AliasFreeHardOptions options_;
-    const ShaderLibrary* library_;
     SampleListBuilder builder_;
     ConservativeRasterSetup conservative_;
     gl::Program light_pass_, resolve_;
     gl::Buffer conservative_params_, afh_params_, work_;
     gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, shadow_, states_;
     size_t capacity_ = size_t(-1);
-    GLuint framebuffer_ = 0, empty_vao_ = 0;
+    GLuint framebuffer_ = 0;
     SampleListsSetup setup_;
     AliasFreeHardFrame frame_;
 
