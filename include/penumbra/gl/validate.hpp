@@ -1,0 +1,53 @@
+// penumbra — load-time validation of the integrator's GL objects (queries allowed here, never in
+// a per-frame call; see penumbra/buffer_range.hpp). Each check throws penumbra::Error naming the
+// function, the role of the object and the offending value.
+#ifndef PENUMBRA_GL_VALIDATE_HPP
+#define PENUMBRA_GL_VALIDATE_HPP
+
+#include "penumbra/buffer_range.hpp"
+#include "penumbra/gl/gl.hpp"
+
+#include <cstdint>
+
+namespace penumbra::gl {
+
+/// `range` names a buffer object with storage, lies inside its GL_BUFFER_SIZE, has an offset
+/// that is a multiple of `alignment`, and holds at least `min_bytes`. A range with
+/// min_bytes == 0 and size 0 is accepted without any query.
+inline void validateRange(const BufferRange& range, uint64_t min_bytes, const char* what, const char* function,
+                          uint64_t alignment = 4) {
+    if (min_bytes == 0 && range.size == 0) return;
+    PENUMBRA_CHECK(range.buffer != 0 && glIsBuffer(range.buffer), "penumbra::", function, ": ", what, " buffer ",
+                   range.buffer, " is not a buffer object");
+    GLint64 size = 0;
+    glGetNamedBufferParameteri64v(range.buffer, GL_BUFFER_SIZE, &size);
+    PENUMBRA_CHECK(size > 0, "penumbra::", function, ": ", what, " buffer ", range.buffer,
+                   " has no storage (GL_BUFFER_SIZE 0)");
+    PENUMBRA_CHECK(alignment == 0 || range.offset % alignment == 0, "penumbra::", function, ": ", what, " offset ",
+                   range.offset, " is not a multiple of ", alignment);
+    const uint64_t total = static_cast<uint64_t>(size);
+    PENUMBRA_CHECK(range.offset <= total && range.size <= total - range.offset, "penumbra::", function, ": ", what,
+                   " range [", range.offset, ", +", range.size, ") exceeds buffer ", range.buffer,
+                   "'s GL_BUFFER_SIZE ", total);
+    PENUMBRA_CHECK(range.size >= min_bytes, "penumbra::", function, ": ", what, " range holds ", range.size,
+                   " bytes, needs ", min_bytes);
+}
+
+/// The whole of buffer `buffer` as a range (one query: for setup code and tests).
+inline BufferRange wholeBuffer(GLuint buffer) {
+    GLint64 size = 0;
+    if (buffer) glGetNamedBufferParameteri64v(buffer, GL_BUFFER_SIZE, &size);
+    return {buffer, 0, static_cast<uint64_t>(size > 0 ? size : 0)};
+}
+
+/// Binds `range` at indexed `target` binding `index` (GL_SHADER_STORAGE_BUFFER,
+/// GL_UNIFORM_BUFFER, ...). No query; an empty range binds nothing.
+inline void bindRange(GLenum target, GLuint index, const BufferRange& range) {
+    if (range.size == 0) return;
+    glBindBufferRange(target, index, range.buffer, static_cast<GLintptr>(range.offset),
+                      static_cast<GLsizeiptr>(range.size));
+}
+
+}  // namespace penumbra::gl
+
+#endif
