@@ -77,10 +77,8 @@
 #endif
 
 #include "penumbra/detail/dispatch.hpp"
+#include "penumbra/detail/float_ops.hpp"
 #include "penumbra/error.hpp"
-#include "penumbra/gl/gl.hpp"
-#include "penumbra/gl/objects.hpp"
-#include "penumbra/gl/shader.hpp"
 #include "penumbra/scan.hpp"
 
 #include <glm/glm.hpp>
@@ -102,11 +100,18 @@ namespace penumbra {
 using SampleListsParams = shared::PenumbraSampleListsParams;
 using SampleListsHeader = shared::PenumbraSampleListsHeader;
 
+using SampleListsFrustum = shared::PenumbraSampleListsFrustum;
+
 // What the shaders assume about the shared structs.
-static_assert(sizeof(SampleListsParams) == 176, "PenumbraSampleListsParams must be 176 bytes (std140 == std430)");
-static_assert(offsetof(SampleListsParams, light) == 128 && offsetof(SampleListsParams, grid) == 144 &&
-                  offsetof(SampleListsParams, view) == 160,
+static_assert(sizeof(SampleListsParams) == 256, "PenumbraSampleListsParams must be 256 bytes (std140 == std430)");
+static_assert(offsetof(SampleListsParams, light_view_projection) == 64 && offsetof(SampleListsParams, view_inverse) == 128 &&
+                  offsetof(SampleListsParams, light) == 192 && offsetof(SampleListsParams, grid) == 208 &&
+                  offsetof(SampleListsParams, view) == 224 && offsetof(SampleListsParams, fit) == 240,
               "PenumbraSampleListsParams member offsets must match GLSL std140");
+static_assert(sizeof(SampleListsFrustum) == 240 && offsetof(SampleListsFrustum, view_projection) == 64 &&
+                  offsetof(SampleListsFrustum, crop) == 128 && offsetof(SampleListsFrustum, box) == 192 &&
+                  offsetof(SampleListsFrustum, extent) == 208 && offsetof(SampleListsFrustum, info) == 224,
+              "PenumbraSampleListsFrustum member offsets must match GLSL std140");
 static_assert(sizeof(SampleListsHeader) == 4 * PENUMBRA_SAMPLE_LISTS_HEADER_WORDS,
               "PenumbraSampleListsHeader size must match PENUMBRA_SAMPLE_LISTS_HEADER_WORDS");
 static_assert(offsetof(SampleListsHeader, rejected) == 16 &&
@@ -174,6 +179,14 @@ struct SampleListsView {
     bool depth_zero_to_one = false;            ///< view clip z in [0, w] (else GL's [-w, w])
 };
 
+/// Value-initialised = defaults.
+struct LightFrustumFitOptions {
+    float margin = 1e-3f;      ///< added on every side, as a fraction of the box size
+    float min_margin = 1e-4f;  ///< at least this much (light-texture units of the original frustum):
+                               ///< covers float rounding and a degenerate (single-point) box
+    bool fit_far = true;       ///< move the far plane to the farthest sample (+ margin); never beyond the original
+};
+
 // ---------------------------------------------------------------------------------------------
 // Setup (pure C++)
 
@@ -218,24 +231,89 @@ inline SampleListsSetup sampleListsSetup(uint32_t grid_width, uint32_t grid_heig
 
 /// bias * view_projection: world -> homogeneous light texture space, where the frustum is
 /// 0 <= x, y, z <= w (z is biased like x and y unless the projection is ZeroToOne already).
-/// Computed once on the host in float; the GPU and the CPU twin use the very same matrix.
+/// The bias is written out in float (twin of penumbraSampleListsBias in fit_resolve.comp.glsl), so
+/// the host, the GPU fit and the CPU twin compute the very same matrix.
 inline glm::mat4 lightTextureMatrix(const glm::mat4& view_projection, LightDepthRange range) {
-    glm::mat4 bias(1.0f);
-    bias[0][0] = bias[1][1] = 0.5f;
-    bias[3][0] = bias[3][1] = 0.5f;
-    if (range != LightDepthRange::ZeroToOne) {
-        bias[2][2] = 0.5f;
-        bias[3][2] = 0.5f;
+    glm::mat4 t;
+    for (int j = 0; j < 4; ++j) {
+        const glm::vec4& m = view_projection[j];
+        const float w = detail::mulRounded(m[3], 0.5f);
+        t[j][0] = detail::mulRounded(m[0], 0.5f) + w;
+        t[j][1] = detail::mulRounded(m[1], 0.5f) + w;
+        t[j][2] = range == LightDepthRange::ZeroToOne ? m[2] : detail::mulRounded(m[2], 0.5f) + w;
+        t[j][3] = m[3];
     }
-    return bias * view_projection;
+    return t;
 }
 
+namespace detail {
+
+inline bool finiteMatrix(const glm::mat4& m) {
+    for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 4; ++r) {
+            if (!std::isfinite(m[c][r])) return false;
+        }
+    }
+    return true;
+}
+
+/// The checks of sampleListsParams without the messages: what a per-frame call (which must not
+/// throw) tests before building the block.
+inline bool sampleListsParamsValid(const SampleListsSetup& setup, const SampleListsLight& light,
+                                   const SampleListsView* view, const LightFrustumFitOptions& fit) {
+    const glm::vec4& l = light.light;
+    if (!finiteMatrix(light.view_projection) || !std::isfinite(l.x) || !std::isfinite(l.y) || !std::isfinite(l.z)) {
+        return false;
+    }
+    if (!(l.w == 0.0f || l.w == 1.0f) || (l.w == 0.0f && l.x == 0.0f && l.y == 0.0f && l.z == 0.0f)) return false;
+    if (setup.lists == 0) return false;
+    if (!(std::isfinite(fit.margin) && fit.margin >= 0.0f && std::isfinite(fit.min_margin) && fit.min_margin > 0.0f)) {
+        return false;
+    }
+    if (view) {
+        if (view->width < 1 || view->height < 1 || uint64_t(view->width) * view->height != setup.sample_count) {
+            return false;
+        }
+        if (!finiteMatrix(view->inverse_view_projection)) return false;
+    }
+    return true;
+}
+
+/// The block itself, inputs assumed valid (sampleListsParamsValid).
+inline SampleListsParams makeSampleListsParams(const SampleListsSetup& setup, const SampleListsLight& light,
+                                               const SampleListsOptions& options, const SampleListsView* view,
+                                               const LightFrustumFitOptions& fit) {
+    SampleListsParams p{};
+    p.light_texture = lightTextureMatrix(light.view_projection, options.depth_range);
+    p.light_view_projection = light.view_projection;
+    p.view_inverse = glm::mat4(1.0f);
+    p.light = light.light;
+    uint32_t flags = 0;
+    if (options.cull_back_facing) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CULL_BACK_FACING;
+    if (options.depth_range != LightDepthRange::Unclipped) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CLIP_DEPTH;
+    if (options.depth_range == LightDepthRange::ZeroToOne) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_LIGHT_DEPTH_ZERO_TO_ONE;
+    if (fit.fit_far) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_FIT_FAR;
+    const uint32_t groups = static_cast<uint32_t>(divUp(setup.sample_count, kSampleListsGroupSize));
+    p.view = glm::uvec4(0u, 0u, groups, 0u);
+    if (view) {
+        p.view_inverse = view->inverse_view_projection;
+        p.view = glm::uvec4(view->width, view->height, groups, 0u);
+        if (view->depth_zero_to_one) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_VIEW_DEPTH_ZERO_TO_ONE;
+    }
+    p.grid = glm::uvec4(setup.grid_width, setup.grid_height, setup.sample_count, flags);
+    p.fit = glm::vec4(fit.margin, fit.min_margin, 0.0f, 0.0f);
+    return p;
+}
+
+}  // namespace detail
+
 /// The uniform block of the count/scatter/fit passes (and of the CPU twin). `view` only for the
-/// depth input. Throws penumbra::Error for a non-finite matrix or light, a light w other than
-/// 0 or 1, or a zero light direction.
+/// depth input; `fit` only matters to the GPU fit. Throws penumbra::Error for a non-finite matrix
+/// or light, a light w other than 0 or 1, a zero light direction, or bad fit margins.
 inline SampleListsParams sampleListsParams(const SampleListsSetup& setup, const SampleListsLight& light,
                                            const SampleListsOptions& options = {},
-                                           const SampleListsView* view = nullptr) {
+                                           const SampleListsView* view = nullptr,
+                                           const LightFrustumFitOptions& fit = {}) {
     for (int c = 0; c < 4; ++c) {
         for (int r = 0; r < 4; ++r) {
             PENUMBRA_CHECK(std::isfinite(light.view_projection[c][r]), "penumbra::sampleListsParams: light view_projection[",
@@ -250,13 +328,6 @@ inline SampleListsParams sampleListsParams(const SampleListsSetup& setup, const 
     PENUMBRA_CHECK(l.w == 1.0f || l.x != 0.0f || l.y != 0.0f || l.z != 0.0f,
                    "penumbra::sampleListsParams: directional light direction (0, 0, 0) is zero");
     PENUMBRA_CHECK(setup.lists != 0, "penumbra::sampleListsParams: setup is empty (use sampleListsSetup)");
-    SampleListsParams p{};
-    p.light_texture = lightTextureMatrix(light.view_projection, options.depth_range);
-    p.view_inverse = glm::mat4(1.0f);
-    p.light = l;
-    uint32_t flags = 0;
-    if (options.cull_back_facing) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CULL_BACK_FACING;
-    if (options.depth_range != LightDepthRange::Unclipped) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_CLIP_DEPTH;
     if (view) {
         PENUMBRA_CHECK(view->width >= 1 && view->height >= 1, "penumbra::sampleListsParams: view size ", view->width,
                        " x ", view->height, " is empty");
@@ -270,12 +341,12 @@ inline SampleListsParams sampleListsParams(const SampleListsSetup& setup, const 
                                view->inverse_view_projection[c][r], " is not finite");
             }
         }
-        p.view_inverse = view->inverse_view_projection;
-        p.view = glm::uvec4(view->width, view->height, 0u, 0u);
-        if (view->depth_zero_to_one) flags |= PENUMBRA_SAMPLE_LISTS_FLAG_VIEW_DEPTH_ZERO_TO_ONE;
     }
-    p.grid = glm::uvec4(setup.grid_width, setup.grid_height, setup.sample_count, flags);
-    return p;
+    PENUMBRA_CHECK(std::isfinite(fit.margin) && fit.margin >= 0.0f && std::isfinite(fit.min_margin) &&
+                       fit.min_margin > 0.0f,
+                   "penumbra::sampleListsParams: fit margin ", fit.margin, " / min_margin ", fit.min_margin,
+                   " must be finite, margin >= 0 and min_margin > 0");
+    return detail::makeSampleListsParams(setup, light, options, view, fit);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -326,21 +397,6 @@ inline ShadowBitAddress shadowBitAddress(uint32_t slot, uint32_t bit, uint32_t b
 
 namespace detail {
 
-inline uint32_t floatBits(float f) {
-    uint32_t bits;
-    std::memcpy(&bits, &f, 4);
-    return bits;
-}
-
-inline float floatFromBits(uint32_t bits) {
-    float f;
-    std::memcpy(&f, &bits, 4);
-    return f;
-}
-
-/// NaN or Inf, on the bits (twin of penumbraSampleListsNonFinite).
-inline bool nonFinite(float f) { return (floatBits(f) & 0x7F800000u) == 0x7F800000u; }
-
 /// Order-preserving key (twin of penumbraSampleListsOrderKey): a < b <=> key(a) < key(b).
 inline uint32_t orderKey(float f) {
     const uint32_t bits = floatBits(f);
@@ -349,19 +405,6 @@ inline uint32_t orderKey(float f) {
 
 inline float orderKeyValue(uint32_t key) {
     return floatFromBits((key & 0x80000000u) ? (key & 0x7FFFFFFFu) : ~key);
-}
-
-/// a * b rounded to float and kept opaque, so the compiler cannot contract it with a following
-/// add into an FMA (GCC contracts across statements with -mfma / -march=native); the GLSL side
-/// uses `precise` for the same reason.
-inline float mulRounded(float a, float b) {
-    float r = a * b;
-#if defined(__GNUC__) && defined(__x86_64__)
-    __asm__("" : "+x"(r));
-#elif defined(__GNUC__) && defined(__aarch64__)
-    __asm__("" : "+w"(r));
-#endif
-    return r;
 }
 
 /// m * (x, y, z, 1) as ((m0 x + m1 y) + m2 z) + m3 (twin of penumbraSampleListsTransform).
@@ -610,14 +653,6 @@ inline std::string sampleListsDifference(const SampleListsCpu& a, const SampleLi
 // ---------------------------------------------------------------------------------------------
 // §4.3 light-frustum fitting
 
-/// Value-initialised = defaults.
-struct LightFrustumFitOptions {
-    float margin = 1e-3f;      ///< added on every side, as a fraction of the box size
-    float min_margin = 1e-4f;  ///< at least this much (light-texture units of the original frustum):
-                               ///< covers float rounding and a degenerate (single-point) box
-    bool fit_far = true;       ///< move the far plane to the farthest sample (+ margin); never beyond the original
-};
-
 struct LightFrustumFit {
     bool valid = false;         ///< false: no sample qualified; crop = identity, view_projection unchanged
     uint32_t samples = 0;       ///< samples that entered the fit (those the build would accept)
@@ -628,10 +663,38 @@ struct LightFrustumFit {
     glm::mat4 crop{1.0f};       ///< NDC crop: box + margin -> [-1, 1]^2, [near, max depth + margin] -> [near, far]
     glm::mat4 view_projection{1.0f};  ///< crop * original light view-projection
     SampleListsHeader keys{};   ///< the reduced keys it was computed from (fit_* words)
+    SampleListsFrustum frustum{};     ///< the same, as the frustum block the count pass reads
 };
 
-/// Turns the reduced fit keys (GPU header or CPU twin) into the fit; pure, so both sides give
-/// bit-identical matrices from identical keys.
+/// The frustum block of an unfitted build: the light's own matrices (what the host uploads when
+/// fitting is off; twin of fit_resolve.comp.glsl with no samples).
+inline SampleListsFrustum sampleListsFrustum(const SampleListsParams& params) {
+    SampleListsFrustum f{};
+    f.light_texture = params.light_texture;
+    f.view_projection = params.light_view_projection;
+    f.crop = glm::mat4(1.0f);
+    return f;
+}
+
+/// The frustum block as a LightFrustumFit (e.g. of a frustum buffer the GPU filled and the caller
+/// read back).
+inline LightFrustumFit lightFrustumFitFromFrustum(const SampleListsFrustum& f) {
+    LightFrustumFit out;
+    out.valid = f.info.x != 0;
+    out.samples = f.info.y;
+    out.min_uv = glm::vec2(f.box.x, f.box.y);
+    out.max_uv = glm::vec2(f.box.z, f.box.w);
+    out.max_depth = f.extent.x;
+    out.far_distance = f.extent.y;
+    out.crop = f.crop;
+    out.view_projection = f.view_projection;
+    out.frustum = f;
+    return out;
+}
+
+/// Turns the reduced fit keys (GPU header or CPU twin) into the fit: the CPU twin of
+/// fit_resolve.comp.glsl, the same double operations in the same order (products kept unfused),
+/// so both sides give identical matrices from identical keys where fp64 is correctly rounded.
 inline LightFrustumFit lightFrustumFitFromHeader(const SampleListsHeader& header, const SampleListsLight& light,
                                                  const SampleListsOptions& options = {},
                                                  const LightFrustumFitOptions& fit = {}) {
@@ -639,50 +702,69 @@ inline LightFrustumFit lightFrustumFitFromHeader(const SampleListsHeader& header
                        fit.min_margin > 0.0f,
                    "penumbra::lightFrustumFitFromHeader: margin ", fit.margin, " / min_margin ", fit.min_margin,
                    " must be finite, margin >= 0 and min_margin > 0");
-    LightFrustumFit out;
-    out.keys = header;
-    out.samples = header.fit_samples;
-    out.view_projection = light.view_projection;
-    if (header.fit_samples == 0) return out;
-    out.valid = true;
+    using detail::mulRounded;
+    SampleListsFrustum f{};
+    f.crop = glm::mat4(1.0f);
+    f.info = glm::uvec4(0u, header.fit_samples, 0u, 0u);
+    if (header.fit_samples == 0) {
+        f.view_projection = light.view_projection;
+        f.light_texture = lightTextureMatrix(light.view_projection, options.depth_range);
+        LightFrustumFit out = lightFrustumFitFromFrustum(f);
+        out.keys = header;
+        return out;
+    }
+    f.info.x = 1u;
     const float u0 = detail::orderKeyValue(header.fit_min_u), v0 = detail::orderKeyValue(header.fit_min_v);
     const float u1 = detail::orderKeyValue(header.fit_max_u), v1 = detail::orderKeyValue(header.fit_max_v);
-    out.min_uv = glm::vec2(u0, v0);
-    out.max_uv = glm::vec2(u1, v1);
-    out.max_depth = detail::orderKeyValue(header.fit_max_depth);
+    const float max_depth = detail::orderKeyValue(header.fit_max_depth);
     const float distance_key = detail::orderKeyValue(header.fit_max_distance);
+    f.box = glm::vec4(u0, v0, u1, v1);
+    double far_distance;
     if (light.light.w == 0.0f) {
-        out.far_distance = static_cast<float>(distance_key / glm::length(glm::dvec3(light.light)));
+        const double lx = light.light.x, ly = light.light.y, lz = light.light.z;
+        double squared = mulRounded(lx, lx) + mulRounded(ly, ly);
+        squared = squared + mulRounded(lz, lz);
+        far_distance = double(distance_key) / std::sqrt(squared);
     } else {
-        out.far_distance = static_cast<float>(std::sqrt(static_cast<double>(distance_key)));
+        far_distance = std::sqrt(double(distance_key));
     }
+    f.extent = glm::vec4(max_depth, static_cast<float>(far_distance), 0.0f, 0.0f);
     // Box in light-texture units, widened by the margin; NDC X = 2u - 1 maps [U0, U1] to [-1, 1]
     // with X' = X / (U1 - U0) + (1 - U0 - U1) / (U1 - U0).
-    auto widen = [&](double lo, double hi, double& out_lo, double& out_hi) {
-        const double m = std::max(double(fit.margin) * (hi - lo), double(fit.min_margin));
-        out_lo = lo - m;
-        out_hi = hi + m;
-    };
-    double U0, U1, V0, V1;
-    widen(u0, u1, U0, U1);
-    widen(v0, v1, V0, V1);
-    glm::dmat4 crop(1.0);
-    crop[0][0] = 1.0 / (U1 - U0);
-    crop[3][0] = (1.0 - U0 - U1) / (U1 - U0);
-    crop[1][1] = 1.0 / (V1 - V0);
-    crop[3][1] = (1.0 - V0 - V1) / (V1 - V0);
+    const double margin = fit.margin, min_margin = fit.min_margin;
+    const double mu = std::max(mulRounded(margin, double(u1) - double(u0)), min_margin);
+    const double mv = std::max(mulRounded(margin, double(v1) - double(v0)), min_margin);
+    const double U0 = double(u0) - mu, U1 = double(u1) + mu;
+    const double V0 = double(v0) - mv, V1 = double(v1) + mv;
+    const double c00 = 1.0 / (U1 - U0), c30 = ((1.0 - U0) - U1) / (U1 - U0);
+    const double c11 = 1.0 / (V1 - V0), c31 = ((1.0 - V0) - V1) / (V1 - V0);
+    double c22 = 1.0, c32 = 0.0;
     // Far plane: light depth z' = z / Z (Z = max depth + margin, < 1) keeps the near plane; in
     // clip space z' = z / Z (ZeroToOne) or z' = z / Z + (1 / Z - 1) w (MinusOneToOne).
     if (fit.fit_far && options.depth_range != LightDepthRange::Unclipped) {
-        const double zmax = out.max_depth;
-        const double Z = zmax + std::max(double(fit.margin) * zmax, double(fit.min_margin));
+        const double zmax = max_depth;
+        const double Z = zmax + std::max(mulRounded(margin, zmax), min_margin);
         if (Z < 1.0 && Z > 0.0) {
-            crop[2][2] = 1.0 / Z;
-            if (options.depth_range == LightDepthRange::MinusOneToOne) crop[3][2] = 1.0 / Z - 1.0;
+            c22 = 1.0 / Z;
+            if (options.depth_range == LightDepthRange::MinusOneToOne) c32 = c22 - 1.0;
         }
     }
-    out.crop = glm::mat4(crop);
-    out.view_projection = glm::mat4(crop * glm::dmat4(light.view_projection));
+    f.crop[0][0] = static_cast<float>(c00);
+    f.crop[3][0] = static_cast<float>(c30);
+    f.crop[1][1] = static_cast<float>(c11);
+    f.crop[3][1] = static_cast<float>(c31);
+    f.crop[2][2] = static_cast<float>(c22);
+    f.crop[3][2] = static_cast<float>(c32);
+    const glm::mat4& m = light.view_projection;
+    for (int j = 0; j < 4; ++j) {
+        const double x = mulRounded(c00, double(m[j][0])) + mulRounded(c30, double(m[j][3]));
+        const double y = mulRounded(c11, double(m[j][1])) + mulRounded(c31, double(m[j][3]));
+        const double z = mulRounded(c22, double(m[j][2])) + mulRounded(c32, double(m[j][3]));
+        f.view_projection[j] = glm::vec4(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z), m[j][3]);
+    }
+    f.light_texture = lightTextureMatrix(f.view_projection, options.depth_range);
+    LightFrustumFit out = lightFrustumFitFromFrustum(f);
+    out.keys = header;
     return out;
 }
 
@@ -820,328 +902,6 @@ inline SampleListStatistics sampleListStatisticsCpu(const SampleListsCpu& lists)
     s.accepted = lists.header.accepted;
     for (uint32_t r = 0; r < kSampleListsReasonCount; ++r) s.rejected[r] = lists.header.rejected[r];
     return s;
-}
-
-// ---------------------------------------------------------------------------------------------
-// GL execution
-
-/// View samples from buffers the caller owns.
-struct SampleBufferInput {
-    GLuint positions = 0;  ///< vec4[sample_count]: xyz world position; w == 0 = no sample
-    GLuint normals = 0;    ///< vec4[sample_count]: xyz world normal; 0 allowed when culling is off
-};
-
-/// View samples from the view's depth buffer (GL_TEXTURE_2D objects the caller owns).
-struct SampleDepthInput {
-    GLuint depth_texture = 0;   ///< window depth at level 0 (1.0 = background)
-    GLuint normal_texture = 0;  ///< xyz world normal at level 0; 0 allowed when culling is off
-    SampleListsView view;
-};
-
-/// The buffers a build writes (sizes: SampleListsSetup::*_bytes; a buffer whose size is 0 may be 0).
-struct SampleListsBuffers {
-    GLuint counts = 0;          ///< uint[W*H]
-    GLuint offsets = 0;         ///< uint[W*H]
-    GLuint list_positions = 0;  ///< vec4[sample_count]
-    GLuint list_ids = 0;        ///< uint[sample_count]
-    GLuint sample_slots = 0;    ///< uint[sample_count]
-    GLuint sample_texels = 0;   ///< uint[sample_count]
-    GLuint header = 0;          ///< SampleListsHeader
-};
-
-namespace detail {
-
-inline void requireBuffer(GLuint id, size_t bytes, const char* what, const char* function) {
-    if (bytes == 0) return;
-    PENUMBRA_CHECK(id != 0 && glIsBuffer(id), "penumbra::", function, ": ", what, " (", id,
-                   ") is not a buffer object; it must hold ", bytes, " bytes");
-    GLint64 size = 0;
-    glGetNamedBufferParameteri64v(id, GL_BUFFER_SIZE, &size);
-    PENUMBRA_CHECK(size >= 0 && static_cast<uint64_t>(size) >= bytes, "penumbra::", function, ": ", what,
-                   " buffer (", id, ") holds ", size, " bytes, needs ", bytes);
-}
-
-inline void requireTexture(GLuint id, const SampleListsView& view, const char* what, const char* function) {
-    PENUMBRA_CHECK(id != 0 && glIsTexture(id), "penumbra::", function, ": ", what, " (", id,
-                   ") is not a texture object");
-    GLint target = 0, width = 0, height = 0, compare = GL_NONE;
-    glGetTextureParameteriv(id, GL_TEXTURE_TARGET, &target);
-    PENUMBRA_CHECK(target == GL_TEXTURE_2D, "penumbra::", function, ": ", what, " (", id, ") is not a GL_TEXTURE_2D");
-    glGetTextureLevelParameteriv(id, 0, GL_TEXTURE_WIDTH, &width);
-    glGetTextureLevelParameteriv(id, 0, GL_TEXTURE_HEIGHT, &height);
-    PENUMBRA_CHECK(width >= 0 && height >= 0 && uint32_t(width) >= view.width && uint32_t(height) >= view.height,
-                   "penumbra::", function, ": ", what, " (", id, ") is ", width, " x ", height, ", the view is ",
-                   view.width, " x ", view.height);
-    glGetTextureParameteriv(id, GL_TEXTURE_COMPARE_MODE, &compare);
-    PENUMBRA_CHECK(compare == GL_NONE, "penumbra::", function, ": ", what, " (", id,
-                   ") has GL_TEXTURE_COMPARE_MODE on; texelFetch needs GL_NONE");
-}
-
-inline void clearWords(GLuint buffer, uint32_t first_word, uint32_t words, uint32_t value) {
-    if (words == 0) return;
-    glClearNamedBufferSubData(buffer, GL_R32UI, GLintptr(first_word) * 4, GLsizeiptr(words) * 4, GL_RED_INTEGER,
-                              GL_UNSIGNED_INT, &value);
-}
-
-inline void dispatch(const DispatchGrid& grid) {
-    if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
-}
-
-}  // namespace detail
-
-/// Builds the lists on the GPU. Owns its programs (compiled on first use, per input kind), a
-/// 176-byte uniform buffer and the Scanner; movable, not copyable. Needs a current GL context
-/// for every call; `library` must outlive the builder.
-class SampleListBuilder {
-public:
-    explicit SampleListBuilder(const ShaderLibrary& library = ShaderLibrary::embedded(), const ScanOptions& scan = {})
-        : library_(&library), scan_options_(scan) {}
-
-    /// Bytes of GPU scratch the builder holds for grids of this size (the Scanner's), beyond
-    /// the caller's buffers and the 176-byte uniform block.
-    size_t scratchBytes(const SampleListsSetup& setup) { return scanner().scratchBytes(setup.lists); }
-
-    /// Load-time preparation: compiles every kernel (both inputs) and grows the Scanner's scratch
-    /// for `setup`, so later builds of this size compile and allocate nothing.
-    void reserve(const SampleListsSetup& setup) {
-        for (int kernel = 0; kernel < kKernels; ++kernel) {
-            for (int input = 0; input < (kernel == kStatistics ? 1 : 2); ++input) program(Kernel(kernel), input);
-        }
-        scanner().reserve(setup.lists);
-        if (!params_.id()) params_ = gl::Buffer(sizeof(SampleListsParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        gl::checkErrors("penumbra::SampleListBuilder::reserve");
-    }
-
-    /// Passes 1-3 for buffer input. Throws penumbra::Error naming a missing or too-small buffer.
-    void build(const SampleListsSetup& setup, const SampleListsLight& light, const SampleBufferInput& input,
-               const SampleListsBuffers& out, const SampleListsOptions& options = {}) {
-        checkBufferInput(setup, input, options, "SampleListBuilder::build");
-        checkOutputs(setup, out);
-        run(setup, sampleListsParams(setup, light, options), PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER,
-            [&] { bindBufferInput(input, options); }, out);
-    }
-
-    /// Passes 1-3 for depth input (sample count = view width * height).
-    void build(const SampleListsSetup& setup, const SampleListsLight& light, const SampleDepthInput& input,
-               const SampleListsBuffers& out, const SampleListsOptions& options = {}) {
-        const SampleListsParams params = sampleListsParams(setup, light, options, &input.view);
-        checkDepthInput(input, options, "SampleListBuilder::build");
-        checkOutputs(setup, out);
-        run(setup, params, PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH, [&] { bindDepthInput(input, options); }, out);
-    }
-
-    /// §4.3: reduces the fit keys into `header` (fit words only) without reading them back.
-    void dispatchFit(const SampleListsSetup& setup, const SampleListsLight& light, const SampleBufferInput& input,
-                     GLuint header, const SampleListsOptions& options = {}) {
-        checkBufferInput(setup, input, options, "SampleListBuilder::dispatchFit");
-        detail::requireBuffer(header, setup.header_bytes, "header", "SampleListBuilder::dispatchFit");
-        runFit(setup, sampleListsParams(setup, light, options), PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER,
-               [&] { bindBufferInput(input, options); }, header);
-    }
-    void dispatchFit(const SampleListsSetup& setup, const SampleListsLight& light, const SampleDepthInput& input,
-                     GLuint header, const SampleListsOptions& options = {}) {
-        const SampleListsParams params = sampleListsParams(setup, light, options, &input.view);
-        checkDepthInput(input, options, "SampleListBuilder::dispatchFit");
-        detail::requireBuffer(header, setup.header_bytes, "header", "SampleListBuilder::dispatchFit");
-        runFit(setup, params, PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH, [&] { bindDepthInput(input, options); }, header);
-    }
-
-    /// §4.3 fit: dispatch, read back (waits for the GPU), turn keys into the crop matrix.
-    template <typename Input>
-    LightFrustumFit fitLightFrustum(const SampleListsSetup& setup, const SampleListsLight& light, const Input& input,
-                                    GLuint header, const SampleListsOptions& options = {},
-                                    const LightFrustumFitOptions& fit = {}) {
-        dispatchFit(setup, light, input, header, options);
-        return lightFrustumFitFromHeader(readHeader(header), light, options, fit);
-    }
-
-    /// Fig. 9: reduces counts into the header's statistics words without reading them back.
-    void dispatchStatistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
-        detail::requireBuffer(lists.counts, setup.counts_bytes, "counts", "SampleListBuilder::dispatchStatistics");
-        detail::requireBuffer(lists.header, setup.header_bytes, "header", "SampleListBuilder::dispatchStatistics");
-        SampleListsParams params{};
-        params.grid = glm::uvec4(setup.grid_width, setup.grid_height, setup.sample_count, 0u);
-        uploadParams(params);
-        detail::clearWords(lists.header, PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 4, 0u);
-        program(kStatistics, 0).use();
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS, lists.counts);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, lists.header);
-        detail::dispatch(setup.list_groups);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    }
-
-    /// Fig. 9 statistics of the last build into `lists`: dispatch + read back (waits for the GPU).
-    SampleListStatistics statistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
-        dispatchStatistics(setup, lists);
-        return sampleListStatisticsFromHeader(setup, readHeader(lists.header));
-    }
-
-    /// Reads the header back (waits for the GPU).
-    static SampleListsHeader readHeader(GLuint header) {
-        SampleListsHeader h{};
-        glGetNamedBufferSubData(header, 0, sizeof h, &h);
-        return h;
-    }
-
-private:
-    enum Kernel { kCount, kScatter, kFit, kStatistics, kKernels };
-
-    const ShaderLibrary* library_;
-    ScanOptions scan_options_;
-    std::unique_ptr<Scanner> scanner_;
-    gl::Program programs_[kKernels][2];
-    gl::Buffer params_;
-
-    Scanner& scanner() {
-        if (!scanner_) scanner_ = std::make_unique<Scanner>(scan_options_);
-        return *scanner_;
-    }
-
-    gl::Program& program(Kernel kernel, int input) {
-        static const char* const keys[kKernels] = {
-            "penumbra/sample_lists/count.comp.glsl", "penumbra/sample_lists/scatter.comp.glsl",
-            "penumbra/sample_lists/fit.comp.glsl", "penumbra/sample_lists/statistics.comp.glsl"};
-        gl::Program& p = programs_[kernel][input];
-        if (!p) {
-            ShaderDefines defines;
-            if (kernel != kStatistics) defines.push_back({"PENUMBRA_SAMPLE_LISTS_INPUT", std::to_string(input)});
-            p = gl::buildComputeProgram(keys[kernel], defines, *library_);
-        }
-        return p;
-    }
-
-    void uploadParams(const SampleListsParams& params) {
-        if (!params_.id()) params_ = gl::Buffer(sizeof(SampleListsParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        params_.upload(0, &params, sizeof params);
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS, params_.id());
-    }
-
-    static void checkBufferInput(const SampleListsSetup& setup, const SampleBufferInput& input,
-                                 const SampleListsOptions& options, const char* function) {
-        detail::requireBuffer(input.positions, size_t(setup.sample_count) * 16, "input positions", function);
-        if (options.cull_back_facing) {
-            detail::requireBuffer(input.normals, size_t(setup.sample_count) * 16, "input normals", function);
-        }
-    }
-
-    static void checkDepthInput(const SampleDepthInput& input, const SampleListsOptions& options, const char* function) {
-        detail::requireTexture(input.depth_texture, input.view, "depth texture", function);
-        if (options.cull_back_facing) detail::requireTexture(input.normal_texture, input.view, "normal texture", function);
-    }
-
-    static void checkOutputs(const SampleListsSetup& setup, const SampleListsBuffers& out) {
-        const char* f = "SampleListBuilder::build";
-        detail::requireBuffer(out.counts, setup.counts_bytes, "counts", f);
-        detail::requireBuffer(out.offsets, setup.offsets_bytes, "offsets", f);
-        detail::requireBuffer(out.list_positions, setup.list_positions_bytes, "list_positions", f);
-        detail::requireBuffer(out.list_ids, setup.list_ids_bytes, "list_ids", f);
-        detail::requireBuffer(out.sample_slots, setup.sample_slots_bytes, "sample_slots", f);
-        detail::requireBuffer(out.sample_texels, setup.sample_texels_bytes, "sample_texels", f);
-        detail::requireBuffer(out.header, setup.header_bytes, "header", f);
-    }
-
-    static void bindBufferInput(const SampleBufferInput& input, const SampleListsOptions& options) {
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS, input.positions);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS,
-                         options.cull_back_facing ? input.normals : 0);
-    }
-
-    static void bindDepthInput(const SampleDepthInput& input, const SampleListsOptions& options) {
-        glBindTextureUnit(PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH, input.depth_texture);
-        glBindSampler(PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH, 0);
-        glBindTextureUnit(PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS, options.cull_back_facing ? input.normal_texture : 0);
-        glBindSampler(PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS, 0);
-    }
-
-    template <typename BindInput>
-    void run(const SampleListsSetup& setup, const SampleListsParams& params, int input, BindInput&& bind_input,
-             const SampleListsBuffers& out) {
-        // Compile before touching any state, so a compile error leaves the caller's buffers alone.
-        gl::Program& count = program(kCount, input);
-        gl::Program& scatter = program(kScatter, input);
-        uploadParams(params);
-        // §3.1: "we initialize the local lists' lengths in the SM to zero".
-        detail::clearWords(out.counts, 0, setup.lists, 0u);
-        detail::clearWords(out.header, PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORD,
-                           PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORDS, 0u);
-        // Pass 1: count.
-        if (setup.sample_count) {
-            count.use();
-            bind_input();
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS, out.counts);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, out.header);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS, out.sample_slots);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS, out.sample_texels);
-            detail::dispatch(setup.sample_groups);
-        }
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        // Pass 2: offsets = exclusive scan of the lengths (§3.1, [HSO07]).
-        Scanner& scan = scanner();
-        scan.reserve(setup.lists);
-        scan.exclusive(out.counts, 0, out.offsets, 0, setup.lists);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        // Pass 3: scatter.
-        if (setup.sample_count) {
-            scatter.use();
-            glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS, params_.id());
-            bind_input();
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS, out.offsets);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS, out.list_positions);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS, out.list_ids);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS, out.sample_slots);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS, out.sample_texels);
-            detail::dispatch(setup.sample_groups);
-        }
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    }
-
-    template <typename BindInput>
-    void runFit(const SampleListsSetup& setup, const SampleListsParams& params, int input, BindInput&& bind_input,
-                GLuint header) {
-        gl::Program& fit = program(kFit, input);
-        uploadParams(params);
-        detail::clearWords(header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MIN_WORD, 2, 0xFFFFFFFFu);
-        detail::clearWords(header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MAX_WORD, 6, 0u);
-        if (setup.sample_count) {
-            fit.use();
-            bind_input();
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SAMPLE_LISTS_BINDING_HEADER, header);
-            detail::dispatch(setup.sample_groups);
-        }
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    }
-};
-
-/// Reads a GPU-built structure back into the CPU twin's form (waits for the GPU): for tests,
-/// debugging and sampleListsDifference. Only the first `accepted` slots of the list arrays are read.
-inline SampleListsCpu downloadSampleLists(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
-    SampleListsCpu out;
-    out.grid_width = setup.grid_width;
-    out.grid_height = setup.grid_height;
-    out.header = SampleListBuilder::readHeader(lists.header);
-    auto read = [](GLuint buffer, size_t count, auto* data) {
-        if (count) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(count * sizeof(*data)), data);
-    };
-    PENUMBRA_CHECK(out.header.accepted <= setup.sample_count, "penumbra::downloadSampleLists: header says ",
-                   out.header.accepted, " accepted samples of ", setup.sample_count);
-    out.counts.resize(setup.lists);
-    out.offsets.resize(setup.lists);
-    out.list_positions.resize(out.header.accepted);
-    out.list_ids.resize(out.header.accepted);
-    out.sample_slots.resize(setup.sample_count);
-    out.sample_texels.resize(setup.sample_count);
-    read(lists.counts, out.counts.size(), out.counts.data());
-    read(lists.offsets, out.offsets.size(), out.offsets.data());
-    read(lists.list_positions, out.list_positions.size(), out.list_positions.data());
-    read(lists.list_ids, out.list_ids.size(), out.list_ids.data());
-    read(lists.sample_slots, out.sample_slots.size(), out.sample_slots.data());
-    read(lists.sample_texels, out.sample_texels.size(), out.sample_texels.data());
-    // Only the counters are part of the structure; fit and statistics words depend on other passes.
-    SampleListsHeader counters{};
-    counters.accepted = out.header.accepted;
-    for (int r = 0; r < 8; ++r) counters.rejected[r] = out.header.rejected[r];
-    out.header = counters;
-    return out;
 }
 
 }  // namespace penumbra

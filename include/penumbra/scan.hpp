@@ -64,6 +64,7 @@
 #include "penumbra/detail/dispatch.hpp"
 #include "penumbra/detail/shared.hpp"
 #include "penumbra/error.hpp"
+#include "penumbra/buffer_range.hpp"
 
 // scan_shared.h holds only macros. It lives with the shaders; with shaders/ on the include path
 // it is found there, otherwise beside this header in the source tree.
@@ -82,6 +83,8 @@
 #include <vector>
 
 namespace penumbra {
+
+struct ScanBindings {};
 
 enum class ScanKind { Exclusive, Inclusive };
 
@@ -417,6 +420,12 @@ public:
         gl::checkErrors("penumbra::Scanner construction");
     }
 
+    // TEMPORARY shim until the engine-grade scanner lands (h/scan).
+    Scanner(const ScanOptions& options, const ShaderLibrary& library, const ScanBindings&) : Scanner(options, library) {}
+    Status exclusive(const BufferRange& in, const BufferRange& out, uint64_t n) {
+        exclusive(in.buffer, in.offset, out.buffer, out.offset, n);
+        return Status::Ok;
+    }
     Scanner(Scanner&& other) noexcept { *this = std::move(other); }
     Scanner& operator=(Scanner&& other) noexcept {
         if (this != &other) {

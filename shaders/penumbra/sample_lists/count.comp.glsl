@@ -8,39 +8,15 @@
 // penumbra-permutation: PENUMBRA_SAMPLE_LISTS_INPUT=0
 // penumbra-permutation: PENUMBRA_SAMPLE_LISTS_INPUT=1
 //
-// Bindings (host: penumbra::SampleListBuilder): uniform block 0 = PenumbraSampleListsParams;
-// buffer input: SSBO 0 positions vec4[], 1 normals vec4[]; depth input: texture units 0 depth,
-// 1 normals; SSBO 2 counts uint[W*H] (zeroed by the host), 3 header, 6 sample slots uint[n]
-// (receives the local index, or PENUMBRA_SAMPLE_LISTS_NO_SLOT), 7 sample texels uint[n].
-#include "penumbra/common/dispatch.glsl"
-#include "penumbra/sample_lists/sample_lists_shared.h"
+// Bindings (defaults; host: penumbra::SampleListBuilder): uniform blocks 0 params, 1 frustum
+// (projects with its light_texture); the inputs of kernel.glsl; SSBO 2 counts uint[W*H] (zeroed
+// by the host), 3 header, 6 sample slots uint[n] (receives the local index, or
+// PENUMBRA_SAMPLE_LISTS_NO_SLOT), 7 sample texels uint[n].
+#include "penumbra/sample_lists/kernel.glsl"
 
-#ifndef PENUMBRA_SAMPLE_LISTS_INPUT
-#error "penumbra/sample_lists/count.comp.glsl: define PENUMBRA_SAMPLE_LISTS_INPUT (0 = buffer, 1 = depth)"
-#endif
-
-layout(local_size_x = PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) in;
-
-layout(std140, binding = PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS) uniform PenumbraSampleListsParamsBlock {
-    PenumbraSampleListsParams penumbraSampleListsParams;
+layout(std140, binding = PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM) uniform PenumbraSampleListsFrustumBlock {
+    PenumbraSampleListsFrustum penumbraSampleListsFrustum;
 };
-#if PENUMBRA_SAMPLE_LISTS_INPUT == PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS) readonly buffer PenumbraSampleListsInputPositionsBlock {
-    vec4 penumbraSampleListsInputPositions[];
-};
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS) readonly buffer PenumbraSampleListsInputNormalsBlock {
-    vec4 penumbraSampleListsInputNormals[];
-};
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_POSITION(id) penumbraSampleListsInputPositions[id]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(id) penumbraSampleListsInputNormals[id].xyz
-#else
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH) uniform sampler2D penumbraSampleListsInputDepth;
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS) uniform sampler2D penumbraSampleListsInputNormals;
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_DEPTH(pixel) texelFetch(penumbraSampleListsInputDepth, ivec2(pixel), 0).r
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(pixel) texelFetch(penumbraSampleListsInputNormals, ivec2(pixel), 0).xyz
-#endif
-#include "penumbra/sample_lists/input.glsl"
-
 layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS) buffer PenumbraSampleListsCountsBlock {
     uint penumbraSampleListsCounts[];
 };
@@ -62,12 +38,12 @@ void main() {
     if (local < 1u + PENUMBRA_SAMPLE_LISTS_REASON_COUNT) penumbraSampleListsGroupCounters[local] = 0u;
     barrier();
 
-    const uint id = penumbraLinearGroup() * uint(PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) + local;
-    if (id < penumbraSampleListsParams.grid.z) {
+    uint id;
+    if (penumbraSampleListsSampleId(id)) {
         vec4 position = penumbraSampleListsLoadPosition(penumbraSampleListsParams, id);
         vec3 normal = penumbraSampleListsLoadNormal(penumbraSampleListsParams, id);
         vec4 t;
-        uint code = penumbraSampleListsClassify(penumbraSampleListsParams.light_texture, penumbraSampleListsParams.light,
+        uint code = penumbraSampleListsClassify(penumbraSampleListsFrustum.light_texture, penumbraSampleListsParams.light,
                                                 penumbraSampleListsParams.grid, position, normal, t);
         if (code < PENUMBRA_SAMPLE_LISTS_REJECTED) {
             // §3.1: the counter's old value is the sample's index inside its list.

@@ -3,42 +3,15 @@
 // to the light source. This allows us to fit an optimal far plane."). A parallel reduction over
 // the samples the count pass would accept: each work group reduces in shared memory with atomics
 // on order-preserving float keys (penumbraSampleListsOrderKey), then one atomic per quantity and
-// group goes to the header; the host turns the keys into a crop matrix
-// (penumbra::lightFrustumFitFromHeader), exactly as the CPU twin does.
+// group goes to the header; fit_resolve.comp.glsl turns the keys into the crop matrix on
+// the GPU, exactly as the CPU twin penumbra::lightFrustumFitFromHeader does.
 //
 // penumbra-permutation: PENUMBRA_SAMPLE_LISTS_INPUT=0
 // penumbra-permutation: PENUMBRA_SAMPLE_LISTS_INPUT=1
 //
 // Bindings: uniform block 0 = params; buffer input: SSBO 0 positions, 1 normals; depth input:
 // texture units 0 depth, 1 normals; SSBO 3 header (fit keys initialised by the host).
-#include "penumbra/common/dispatch.glsl"
-#include "penumbra/sample_lists/sample_lists_shared.h"
-
-#ifndef PENUMBRA_SAMPLE_LISTS_INPUT
-#error "penumbra/sample_lists/fit.comp.glsl: define PENUMBRA_SAMPLE_LISTS_INPUT (0 = buffer, 1 = depth)"
-#endif
-
-layout(local_size_x = PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) in;
-
-layout(std140, binding = PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS) uniform PenumbraSampleListsParamsBlock {
-    PenumbraSampleListsParams penumbraSampleListsParams;
-};
-#if PENUMBRA_SAMPLE_LISTS_INPUT == PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS) readonly buffer PenumbraSampleListsInputPositionsBlock {
-    vec4 penumbraSampleListsInputPositions[];
-};
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS) readonly buffer PenumbraSampleListsInputNormalsBlock {
-    vec4 penumbraSampleListsInputNormals[];
-};
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_POSITION(id) penumbraSampleListsInputPositions[id]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(id) penumbraSampleListsInputNormals[id].xyz
-#else
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH) uniform sampler2D penumbraSampleListsInputDepth;
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS) uniform sampler2D penumbraSampleListsInputNormals;
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_DEPTH(pixel) texelFetch(penumbraSampleListsInputDepth, ivec2(pixel), 0).r
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(pixel) texelFetch(penumbraSampleListsInputNormals, ivec2(pixel), 0).xyz
-#endif
-#include "penumbra/sample_lists/input.glsl"
+#include "penumbra/sample_lists/kernel.glsl"
 
 layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_HEADER) buffer PenumbraSampleListsHeaderBlock {
     PenumbraSampleListsHeader penumbraSampleListsHeader;
@@ -52,8 +25,8 @@ void main() {
     if (local < 7u) penumbraSampleListsFitShared[local] = local < 2u ? 0xFFFFFFFFu : 0u;
     barrier();
 
-    const uint id = penumbraLinearGroup() * uint(PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) + local;
-    if (id < penumbraSampleListsParams.grid.z) {
+    uint id;
+    if (penumbraSampleListsSampleId(id)) {
         const vec4 light = penumbraSampleListsParams.light;
         vec4 position = penumbraSampleListsLoadPosition(penumbraSampleListsParams, id);
         vec3 normal = penumbraSampleListsLoadNormal(penumbraSampleListsParams, id);

@@ -39,33 +39,86 @@ namespace penumbra::shared {
 #define PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER 0  // vec4 positions + vec4 normals (SSBOs)
 #define PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH 1   // depth texture + inverse view-projection, normal texture
 
-// Binding points of the library's own kernels (the integrator's passes choose their own through
-// the hooks of sample_lists.glsl / shadow_bits.glsl). Binding 3 is the offsets in the scatter
-// pass and the header in the other passes: no pass needs both, and GL guarantees only 8.
-#define PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS 0          // uniform block
-#define PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS 0       // SSBO, buffer input
-#define PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS 1         // SSBO, buffer input
-#define PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS 2
-#define PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS 3         // scatter pass
-#define PENUMBRA_SAMPLE_LISTS_BINDING_HEADER 3          // count, fit and statistics passes
-#define PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS 4
-#define PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS 5
-#define PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS 6
-#define PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS 7
-#define PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH 0              // texture unit, depth input
-#define PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS 1            // texture unit, depth input
+// PenumbraSampleListsParams::grid.w flags set by the host for the §4.3 fit-resolve pass.
+#define PENUMBRA_SAMPLE_LISTS_FLAG_FIT_FAR 8u                // fit the far plane too
+#define PENUMBRA_SAMPLE_LISTS_FLAG_LIGHT_DEPTH_ZERO_TO_ONE 16u  // the light's clip z is in [0, w]
 
-// Uniform block of every kernel (176 bytes; identical in std140 and std430).
+// Binding points of the library's own kernels: the defaults of penumbra::SampleListsBindings.
+// The executor injects the integrator's choice as defines, so each is overridable (#ifndef).
+// Binding 3 is the offsets in the scatter pass and the header in the other passes, binding 2 the
+// counts and, in the fit-resolve pass, the frustum it writes: no pass needs both, and GL
+// guarantees only 8 SSBO bindings per stage.
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS 0          // uniform block: PenumbraSampleListsParams
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM
+#define PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM 1         // uniform block: PenumbraSampleListsFrustum
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS 0       // SSBO, buffer input
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS 1         // SSBO, buffer input
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS 2
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT
+#define PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT 2     // SSBO, fit-resolve pass
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS 3         // scatter pass
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_HEADER
+#define PENUMBRA_SAMPLE_LISTS_BINDING_HEADER 3          // count, fit, fit-resolve and statistics passes
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS 4
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS 5
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS 6
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS
+#define PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS 7
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH
+#define PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH 0              // texture unit, depth input
+#endif
+#ifndef PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS
+#define PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS 1            // texture unit, depth input
+#endif
+
+// Uniform block of every kernel (256 bytes; identical in std140 and std430). The host writes it
+// once per build; nothing in it depends on GPU results.
 struct PenumbraSampleListsParams {
-    mat4 light_texture;   // world -> homogeneous light texture space: bias * light view-projection,
-                          // so inside the frustum 0 <= x, y, z <= w (the host computes it once)
-    mat4 view_inverse;    // depth input: inverse of the view's view-projection (clip -> world)
-    vec4 light;           // xyz = position (w = 1, point light) or direction towards the light (w = 0)
-    uvec4 grid;           // x = W, y = H, z = sample count, w = PENUMBRA_SAMPLE_LISTS_FLAG_* bits
-    uvec4 view;           // depth input: x = view width, y = view height; z, w = 0 (padding)
+    mat4 light_texture;          // world -> homogeneous light texture space of the light's own
+                                 // view-projection: bias * light_view_projection (0 <= x, y, z <= w
+                                 // inside); the fit pass projects with it
+    mat4 light_view_projection;  // the light's view-projection as the integrator gave it
+    mat4 view_inverse;           // depth input: inverse of the view's view-projection (clip -> world)
+    vec4 light;                  // xyz = position (w = 1, point light) or direction towards the light (w = 0)
+    uvec4 grid;                  // x = W, y = H, z = sample count, w = PENUMBRA_SAMPLE_LISTS_FLAG_* bits
+    uvec4 view;                  // x, y = view width, height (depth input); z = sample work groups; w = 0
+    vec4 fit;                    // x = margin, y = min_margin (LightFrustumFitOptions); z, w = 0
 };
 
-// The header buffer (96 bytes): counters of the count pass, §4.3 fit keys, Fig. 9 statistics.
+// What the count and scatter passes project with, and the light pass draws with (240 bytes,
+// std140 == std430). Written by the host (no fit) or by the fit-resolve pass on the GPU (§4.3),
+// so the fitted frustum never travels through the CPU.
+struct PenumbraSampleListsFrustum {
+    mat4 light_texture;    // bias * view_projection
+    mat4 view_projection;  // the light view-projection the lists were built for (fitted or not)
+    mat4 crop;             // fitted NDC crop (identity without a fit)
+    vec4 box;              // fitted box of the samples in the original light texture: min u, min v, max u, max v
+    vec4 extent;           // x = max light-texture depth, y = far distance (§4.3), z, w = 0
+    uvec4 info;            // x = 1 when fitted, y = samples that entered the fit, z, w = 0
+};
+
+// The header buffer (96 bytes; an SSBO, std430 only: `rejected[8]` would have a 16-byte stride
+// under std140): counters of the count pass, §4.3 fit keys, Fig. 9 statistics.
 // Fit keys are order-preserving encodings of floats (penumbraSampleListsOrderKey), so atomicMin /
 // atomicMax on uints reduce floats.
 struct PenumbraSampleListsHeader {

@@ -13,34 +13,7 @@
 // read); depth input: texture unit 0 depth (1 normals: never read); SSBO 3 offsets uint[W*H],
 // 4 list positions vec4[], 5 list ids uint[], 6 sample slots uint[n] (local index in, slot out),
 // 7 sample texels uint[n] (read).
-#include "penumbra/common/dispatch.glsl"
-#include "penumbra/sample_lists/sample_lists_shared.h"
-
-#ifndef PENUMBRA_SAMPLE_LISTS_INPUT
-#error "penumbra/sample_lists/scatter.comp.glsl: define PENUMBRA_SAMPLE_LISTS_INPUT (0 = buffer, 1 = depth)"
-#endif
-
-layout(local_size_x = PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) in;
-
-layout(std140, binding = PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS) uniform PenumbraSampleListsParamsBlock {
-    PenumbraSampleListsParams penumbraSampleListsParams;
-};
-#if PENUMBRA_SAMPLE_LISTS_INPUT == PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS) readonly buffer PenumbraSampleListsInputPositionsBlock {
-    vec4 penumbraSampleListsInputPositions[];
-};
-layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS) readonly buffer PenumbraSampleListsInputNormalsBlock {
-    vec4 penumbraSampleListsInputNormals[];
-};
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_POSITION(id) penumbraSampleListsInputPositions[id]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(id) penumbraSampleListsInputNormals[id].xyz
-#else
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH) uniform sampler2D penumbraSampleListsInputDepth;
-layout(binding = PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS) uniform sampler2D penumbraSampleListsInputNormals;
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_DEPTH(pixel) texelFetch(penumbraSampleListsInputDepth, ivec2(pixel), 0).r
-#define PENUMBRA_SAMPLE_LISTS_LOAD_INPUT_NORMAL(pixel) texelFetch(penumbraSampleListsInputNormals, ivec2(pixel), 0).xyz
-#endif
-#include "penumbra/sample_lists/input.glsl"
+#include "penumbra/sample_lists/kernel.glsl"
 
 layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS) readonly buffer PenumbraSampleListsOffsetsBlock {
     uint penumbraSampleListsOffsets[];
@@ -59,8 +32,8 @@ layout(std430, binding = PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS) readonly b
 };
 
 void main() {
-    const uint id = penumbraLinearGroup() * uint(PENUMBRA_SAMPLE_LISTS_GROUP_SIZE) + gl_LocalInvocationID.x;
-    if (id >= penumbraSampleListsParams.grid.z) return;
+    uint id;
+    if (!penumbraSampleListsSampleId(id)) return;
     const uint texel = penumbraSampleListsSampleTexels[id];
     if (texel >= PENUMBRA_SAMPLE_LISTS_REJECTED) return;  // its slot is already NO_SLOT
     const uint slot = penumbraSampleListsOffsets[texel] + penumbraSampleListsSampleSlots[id];

@@ -1,0 +1,2 @@
+// TEMPORARY: replaced by the engine-grade scanner (h/scan).
+#include "penumbra/scan.hpp"
