@@ -2,8 +2,10 @@
 // pairs, the GPU pipeline against its CPU twin (bit for bit) and against the exact oracle (0
 // mismatches outside reported ties) on every built-in scene and spot.obj with several lights,
 // the skips proven bit-identical, multi-pass list blocks, and bad input.
+#include "support/gl_test_support.hpp"
+
 #include <penumbra/gl/headless.hpp>
-#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/obj.hpp>
@@ -18,38 +20,52 @@
 
 namespace {
 
-penumbra::gl::HeadlessContext& context() {
-    static penumbra::gl::HeadlessContext ctx;
-    return ctx;
-}
+using penumbra::Status;
+using penumbra::test::context;
+using penumbra::test::testSeed;
 
-uint32_t testSeed() {
-    if (const char* env = std::getenv("PENUMBRA_SEED")) return static_cast<uint32_t>(std::strtoul(env, nullptr, 10));
-    return std::random_device{}();
-}
+/// Which view samples the pipeline gets: the G-buffer's exact surface points (buffer input) or
+/// positions reconstructed on the GPU from the depth buffer (the realistic input).
+enum class ViewSamples { Exact, Depth };
+/// A coplanar tolerance above the depth-reconstruction error of these views (relative).
+constexpr double kDepthCoplanarEpsilon = 2e-5;
+const char* viewSamplesName(ViewSamples v) { return v == ViewSamples::Exact ? "exact" : "depth"; }
 
 // Everything one pipeline run on a scene needs, with CPU copies for the twin and the oracle.
 struct Fixture {
     penumbra::scene::Scene scene;
     std::unique_ptr<penumbra::scene::GpuScene> gpu;
     std::unique_ptr<penumbra::scene::GBuffer> gbuffer;
-    std::vector<glm::vec4> positions, normals;
+    std::vector<glm::vec4> positions, normals;  ///< the true surface points (primary-ray hits) and face normals
+    std::vector<glm::vec4> reconstructed;       ///< what the depth input reconstructs (CPU twin, same bits)
     std::vector<uint8_t> closed_per_triangle;
+    penumbra::SampleListsView view;
     uint32_t width = 0, height = 0;
 
     Fixture(penumbra::scene::Scene s, uint32_t w, uint32_t h) : scene(std::move(s)), width(w), height(h) {
         gpu = std::make_unique<penumbra::scene::GpuScene>(scene);
         gbuffer = std::make_unique<penumbra::scene::GBuffer>(w, h);
-        gbuffer->render(*gpu, scene.camera.projection(float(w) / float(h)) * scene.camera.view());
+        const glm::mat4 camera = scene.camera.projection(float(w) / float(h)) * scene.camera.view();
+        gbuffer->render(*gpu, camera);
         positions = gbuffer->positionBuffer().download<glm::vec4>();
         normals = gbuffer->faceBuffer().download<glm::vec4>();
         for (const auto& r : gpu->ranges()) closed_per_triangle.insert(closed_per_triangle.end(), r.index_count / 3, r.closed ? 1 : 0);
+        view.width = w;
+        view.height = h;
+        view.inverse_view_projection = glm::inverse(camera);
+        std::vector<float> depth(size_t(w) * h);
+        glGetTextureImage(gbuffer->depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * 4), depth.data());
+        reconstructed = penumbra::reconstructViewSamples(view, depth.data());
     }
 
     penumbra::SampleBufferInput input() const {
-        return {gbuffer->positionBuffer().id(), gbuffer->faceBuffer().id()};
+        auto r = [](const penumbra::gl::Buffer& b) { return penumbra::BufferRange{b.id(), 0, b.size()}; };
+        return {r(gbuffer->positionBuffer()), r(gbuffer->faceBuffer())};
     }
+    penumbra::SampleDepthInput depthInput() const { return {gbuffer->depthTexture(), gbuffer->faceTexture(), view}; }
     uint32_t samples() const { return width * height; }
+    /// The positions the pipeline tests for this input (what the oracle must be asked about).
+    const std::vector<glm::vec4>& tested(ViewSamples v) const { return v == ViewSamples::Exact ? positions : reconstructed; }
 
     penumbra::AliasFreeHardShadows::DrawCasters drawer() const {
         return [this](penumbra::CasterClass cls) {
@@ -60,6 +76,22 @@ struct Fixture {
     }
     penumbra::AfhCasters casters() const { return {&gpu->positions(), &gpu->indices(), &closed_per_triangle}; }
 };
+
+/// reserve + validate (load time), then one frame; the states read back.
+std::vector<uint32_t> runPipeline(penumbra::AliasFreeHardShadows& pipeline, const Fixture& f,
+                                  const penumbra::SampleListsLight& light, ViewSamples v) {
+    pipeline.reserve(f.samples());
+    Status s;
+    if (v == ViewSamples::Exact) {
+        pipeline.validate(f.input(), f.samples());
+        s = pipeline.run(f.input(), f.samples(), light, f.drawer());
+    } else {
+        pipeline.validate(f.depthInput());
+        s = pipeline.run(f.depthInput(), light, f.drawer());
+    }
+    REQUIRE(s == Status::Ok);
+    return pipeline.stateBuffer().download<uint32_t>(0, f.samples());
+}
 
 penumbra::SampleListsLight pointLight(const Fixture& f, const glm::vec3& position) {
     const auto [lo, hi] = penumbra::viewSampleBounds(f.positions.data(), f.positions.size());
@@ -74,8 +106,9 @@ struct Comparison {
 };
 
 // GPU states vs the exact oracle with the same light point and coplanar rule, on every listed sample.
-Comparison compareWithOracle(const Fixture& f, const penumbra::SampleListsLight& light,
-                             const std::vector<uint32_t>& states, double coplanar_epsilon, float reach) {
+Comparison compareWithOracle(const Fixture& f, const std::vector<glm::vec4>& positions,
+                             const penumbra::SampleListsLight& light, const std::vector<uint32_t>& states,
+                             double coplanar_epsilon, float reach, bool report = true) {
     penumbra::reference::VisibilityOracle oracle(f.gpu->positions(), f.gpu->indices());
     penumbra::reference::VisibilityOptions options;
     options.coplanar_epsilon = coplanar_epsilon;
@@ -86,7 +119,7 @@ Comparison compareWithOracle(const Fixture& f, const penumbra::SampleListsLight&
         if (states[id] == PENUMBRA_AFH_BACK_FACING) ++c.back_facing;
         if (states[id] == PENUMBRA_AFH_UNTESTED) ++c.untested;
         if (states[id] != PENUMBRA_AFH_LIT && states[id] != PENUMBRA_AFH_SHADOWED) continue;
-        receivers.emplace_back(glm::vec3(f.positions[id]));
+        receivers.emplace_back(glm::vec3(positions[id]));
         ids.push_back(id);
     }
     c.tested = receivers.size();
@@ -101,36 +134,9 @@ Comparison compareWithOracle(const Fixture& f, const penumbra::SampleListsLight&
             }
             if (gpu != result.isBlocked(r, 0)) {
                 ++c.mismatched;
-                if (c.mismatched <= 5) {
-                    // Name the triangles that decide it, for the report.
-                    const glm::dvec3 p = receivers[r], l(glm::vec3(light.light));
-                    std::string blockers;
-                    const auto& P = f.gpu->positions();
-                    const auto& I = f.gpu->indices();
-                    for (size_t t = 0; t < I.size() / 3; ++t) {
-                        const glm::dvec3 a(P[I[3 * t]]), b(P[I[3 * t + 1]]), cc(P[I[3 * t + 2]]);
-                        if (penumbra::afhBlocks<double>(a, b, cc, p, l, coplanar_epsilon, 0.0)) {
-                            blockers += " " + std::to_string(t) + (f.closed_per_triangle[t] ? "c" : "o") +
-                                        (glm::dot(glm::cross(b - a, cc - a), l - a) < 0 ? "B" : "F");
-                        }
-                    }
-                    const auto hit = oracle.closestHit(p, l - p, 0.0, 1.0);
-                    uint32_t own = 0;
-                    std::memcpy(&own, &f.normals[ids[r]].w, 4);
-                    {
-                        const auto& P = f.gpu->positions();
-                        const auto& I = f.gpu->indices();
-                        for (uint32_t t : {own, hit.triangle}) {
-                            const glm::dvec3 a(P[I[3 * t]]), b(P[I[3 * t + 1]]), cc(P[I[3 * t + 2]]);
-                            const glm::dvec3 n = glm::normalize(glm::cross(b - a, cc - a));
-                            MESSAGE("  tri ", t, " idx ", I[3*t], " ", I[3*t+1], " ", I[3*t+2], " n.(l-p) ", glm::dot(n, l - p),
-                                    " dist(p) ", glm::dot(n, p - a), " gbuf normal.n ", glm::dot(n, glm::dvec3(glm::vec3(f.normals[ids[r]]))));
-                        }
-                    }
-                    MESSAGE("  first crossing t = ", hit.t, " triangle ", hit.triangle, "; sample's own triangle ", own,
-                            " distance to crossing ", hit.t * glm::length(l - p));
-                    MESSAGE("mismatch: sample ", ids[r], " (", p.x, ", ", p.y, ", ", p.z, ") gpu ", gpu, " oracle ",
-                            result.isBlocked(r, 0), "; afhBlocks triangles:", blockers);
+                if (report && c.mismatched <= 5) {
+                    MESSAGE("mismatch: sample ", ids[r], " (", receivers[r].x, ", ", receivers[r].y, ", ", receivers[r].z,
+                            ") gpu ", gpu, " oracle ", result.isBlocked(r, 0));
                 }
             }
         }
@@ -165,9 +171,7 @@ std::vector<glm::vec3> lightPositions(const penumbra::scene::Scene& scene) {
 }  // namespace
 
 TEST_CASE("blocker test == oracle on random and adversarial pairs (outside ties)") {
-    const uint32_t seed = testSeed();
-    MESSAGE("seed ", seed);
-    std::mt19937 rng(seed);
+    std::mt19937 rng(testSeed());
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     size_t pairs = 0, ties = 0, mismatched = 0, blocked = 0;
     for (int trial = 0; trial < 2000; ++trial) {
@@ -212,92 +216,139 @@ TEST_CASE("blocker test == oracle on random and adversarial pairs (outside ties)
     CHECK(mismatched == 0);
 }
 
-TEST_CASE("GPU pipeline == CPU twin, both raster variants and precisions; skips are bit-identical") {
+TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions; skips are bit-identical") {
     context();
     Fixture f(penumbra::scene::builtin("torus_knot"), 96, 72);
     const auto light = pointLight(f, f.scene.light.position);
-    std::vector<uint32_t> reference_states;
-    for (auto variant : {penumbra::ConservativeVariant::Fixed6, penumbra::ConservativeVariant::Exact}) {
-        for (auto precision : {penumbra::AfhPrecision::Exact, penumbra::AfhPrecision::Fast}) {
-            for (int skips = 0; skips < 2; ++skips) {
-                CAPTURE(int(variant));
-                CAPTURE(int(precision));
-                CAPTURE(skips);
-                penumbra::AliasFreeHardOptions o;
-                o.grid_width = 96;
-                o.grid_height = 72;
-                o.variant = variant;
-                o.precision = precision;
-                o.skip_shadowed = skips == 1;
-                o.clip_to_box = skips == 1;
-                penumbra::AliasFreeHardShadows pipeline(o);
-                const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
-                const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
-                penumbra::SampleListsLight fitted = light;
-                fitted.view_projection = frame.light_view_projection;
-                const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
-                size_t differ = 0, shadowed = 0;
-                for (size_t i = 0; i < states.size(); ++i) {
-                    differ += states[i] != cpu[i];
-                    shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
-                }
-                CHECK(differ == 0);
-                CHECK(shadowed > 100);
-                if (precision == penumbra::AfhPrecision::Exact) {
-                    if (reference_states.empty()) reference_states = states;
-                    CHECK(states == reference_states);  // variant and skips change nothing
+    for (ViewSamples v : {ViewSamples::Exact, ViewSamples::Depth}) {
+        std::vector<uint32_t> reference_states;
+        for (auto variant : {penumbra::ConservativeVariant::Fixed6, penumbra::ConservativeVariant::Exact}) {
+            for (auto precision : {penumbra::AfhPrecision::Exact, penumbra::AfhPrecision::Fast}) {
+                for (int skips = 0; skips < 2; ++skips) {
+                    CAPTURE(viewSamplesName(v));
+                    CAPTURE(int(variant));
+                    CAPTURE(int(precision));
+                    CAPTURE(skips);
+                    penumbra::AliasFreeHardOptions o;
+                    o.grid_width = 96;
+                    o.grid_height = 72;
+                    o.variant = variant;
+                    o.precision = precision;
+                    o.skip_shadowed = skips == 1;
+                    o.clip_to_box = skips == 1;
+                    penumbra::AliasFreeHardShadows pipeline(o);
+                    const auto states = runPipeline(pipeline, f, light, v);
+                    const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
+                    penumbra::SampleListsLight fitted = light;
+                    fitted.view_projection = frame.light_view_projection;
+                    const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.tested(v).data(), f.normals.data(),
+                                                                f.samples(), f.casters());
+                    size_t differ = 0, shadowed = 0;
+                    for (size_t i = 0; i < states.size(); ++i) {
+                        differ += states[i] != cpu[i];
+                        shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
+                    }
+                    CHECK(differ == 0);
+                    CHECK(shadowed > 100);
+                    if (precision == penumbra::AfhPrecision::Exact) {
+                        if (reference_states.empty()) reference_states = states;
+                        CHECK(states == reference_states);  // variant and skips change nothing
+                    }
                 }
             }
         }
     }
 }
 
-TEST_CASE("0 mismatches against the oracle on every scene with three point lights, 256x256") {
-    context();
+namespace {
+
+std::vector<std::pair<std::string, penumbra::scene::Scene>> allScenes() {
     std::vector<std::pair<std::string, penumbra::scene::Scene>> scenes;
     for (const auto& name : penumbra::scene::builtinNames()) scenes.emplace_back(name, penumbra::scene::builtin(name));
-    const std::string spot = std::string(PENUMBRA_SHARED_SCENES_DIR) + "/spot.obj";
-    if (std::filesystem::exists(spot)) {
-        scenes.emplace_back("spot.obj", penumbra::scene::loadObj(spot));
+    const std::string dir = PENUMBRA_SHARED_SCENES_DIR;
+    if (std::filesystem::is_directory(dir)) {
+        std::vector<std::string> files;
+        for (const auto& e : std::filesystem::directory_iterator(dir)) {
+            if (e.path().extension() == ".obj") files.push_back(e.path().string());
+        }
+        std::sort(files.begin(), files.end());
+        for (const auto& file : files) scenes.emplace_back(std::filesystem::path(file).filename().string(), penumbra::scene::loadObj(file));
     } else {
-        MESSAGE("skipping spot.obj: ", spot, " is absent");
+        MESSAGE("skipping the shared OBJ scenes: ", dir, " is absent");
     }
-    // PENUMBRA_AFH_SIZE overrides the view size (e.g. 512 for the issue's larger check).
-    // PENUMBRA_AFH_SIZE=W or WxH overrides the 256x256 view (e.g. 512x384, the demo's size).
+    return scenes;
+}
+
+}  // namespace
+
+TEST_CASE("0 mismatches against the oracle on every scene, three point lights, both view-sample inputs") {
+    context();
+    // PENUMBRA_AFH_SIZE=W or WxH overrides the 192x192 view (e.g. 512x384, the demo's size).
     const char* size_env = std::getenv("PENUMBRA_AFH_SIZE");
-    uint32_t size = 256, height = 256;
+    uint32_t size = 192, height = 192;
     if (size_env) {
         char* end = nullptr;
         size = height = static_cast<uint32_t>(std::strtoul(size_env, &end, 10));
         if (end && *end == 'x') height = static_cast<uint32_t>(std::strtoul(end + 1, nullptr, 10));
     }
-    for (auto& [name, scene] : scenes) {
+    size_t true_surface_disagree = 0, true_surface_wide = 0, true_surface_tested = 0;
+    for (auto& [name, scene] : allScenes()) {
         Fixture f(scene, size, height);
         for (const auto& position : lightPositions(f.scene)) {
-            CAPTURE(name);
             const auto light = pointLight(f, position);
-            penumbra::AliasFreeHardOptions o;
-            o.grid_width = size;
-            o.grid_height = height;
-            penumbra::AliasFreeHardShadows pipeline(o);
-            pipeline.run(f.input(), f.samples(), light, f.drawer());
-            const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
-            const Comparison c = compareWithOracle(f, light, states, o.coplanar_epsilon, 0.0f);
-            MESSAGE(name, " light (", position.x, ", ", position.y, ", ", position.z, "): ", c.tested, " samples, ",
-                    c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties, " (back-facing ",
-                    c.back_facing, ", untested ", c.untested, ")");
-            CHECK(c.tested > size * height / 8);
-            CHECK(c.untested == 0);
-            CHECK(c.mismatched == 0);
-            CHECK(double(c.ties) < 1e-4 * double(c.tested));
+            for (ViewSamples v : {ViewSamples::Exact, ViewSamples::Depth}) {
+                CAPTURE(name);
+                CAPTURE(viewSamplesName(v));
+                penumbra::AliasFreeHardOptions o;
+                o.grid_width = size;
+                o.grid_height = height;
+                penumbra::AliasFreeHardShadows pipeline(o);
+                const auto states = runPipeline(pipeline, f, light, v);
+                // Exactness: the oracle on the very same float positions the GPU tested.
+                const Comparison c = compareWithOracle(f, f.tested(v), light, states, o.coplanar_epsilon, 0.0f);
+                MESSAGE(name, " ", viewSamplesName(v), " light (", position.x, ", ", position.y, ", ", position.z, "): ",
+                        c.tested, " samples, ", c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties,
+                        " (back-facing ", c.back_facing, ", untested ", c.untested, ")");
+                CHECK(c.tested > size * height / 8);
+                CHECK(c.untested == 0);
+                CHECK(c.mismatched == 0);
+                CHECK(double(c.ties) < 1e-4 * double(c.tested));
+                if (v == ViewSamples::Depth) {
+                    // The cost of depth reconstruction: the same states against the oracle at the
+                    // true surface points (each pixel's primary-ray hit). A figure, not an assertion.
+                    const Comparison t = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f, false);
+                    // With a coplanar tolerance above the reconstruction error (~1e-5 relative
+                    // here), a sample no longer shadows itself through its own surface; the
+                    // result is still exact for that rule (the oracle with the same epsilon).
+                    penumbra::AliasFreeHardOptions wide = o;
+                    wide.coplanar_epsilon = kDepthCoplanarEpsilon;
+                    penumbra::AliasFreeHardShadows tolerant(wide);
+                    const auto wide_states = runPipeline(tolerant, f, light, v);
+                    const Comparison w = compareWithOracle(f, f.tested(v), light, wide_states, wide.coplanar_epsilon, 0.0f);
+                    CHECK(w.mismatched == 0);
+                    const Comparison wt = compareWithOracle(f, f.positions, light, wide_states, wide.coplanar_epsilon, 0.0f, false);
+                    MESSAGE("  true-surface disagreement of the depth input: ", t.mismatched, " of ", t.tested,
+                            " (coplanar epsilon ", o.coplanar_epsilon, "), ", wt.mismatched, " (epsilon ",
+                            kDepthCoplanarEpsilon, ", exact for it: ", w.mismatched, " mismatches, ", w.ties, " ties)");
+                    true_surface_disagree += t.mismatched;
+                    true_surface_wide += wt.mismatched;
+                    true_surface_tested += t.tested;
+                }
+            }
         }
     }
+    MESSAGE("depth input vs the true surface, all scenes: ", true_surface_disagree, " of ", true_surface_tested,
+            " samples disagree (", 100.0 * double(true_surface_disagree) / double(std::max<size_t>(true_surface_tested, 1)),
+            " %) with the default coplanar epsilon, ", true_surface_wide, " (",
+            100.0 * double(true_surface_wide) / double(std::max<size_t>(true_surface_tested, 1)), " %) with ",
+            kDepthCoplanarEpsilon);
 }
 
-TEST_CASE("closed casters with every face cast equal the oracle too, at the demo's 512x384") {
+TEST_CASE("§3.3 back faces only vs every face cast, at the demo's 512x384") {
     context();
     Fixture f(penumbra::scene::builtin("torus_knot"), 512, 384);
     const auto light = pointLight(f, f.scene.light.position);
+    CHECK_FALSE(penumbra::AliasFreeHardOptions{}.back_faces_only);  // exact by default
     for (bool back_faces_only : {true, false}) {
         penumbra::AliasFreeHardOptions o;
         o.grid_width = 512;
@@ -305,11 +356,11 @@ TEST_CASE("closed casters with every face cast equal the oracle too, at the demo
         o.back_faces_only = back_faces_only;
         o.count_work = true;
         penumbra::AliasFreeHardShadows pipeline(o);
-        const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
-        const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
-        const Comparison c = compareWithOracle(f, light, states, o.coplanar_epsilon, 0.0f);
+        const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
+        const auto frame = pipeline.readFrame();
+        const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f);
         MESSAGE("torus_knot 512x384, back_faces_only=", back_faces_only, ": ", c.tested, " samples, mismatched ",
-                c.mismatched, ", ties ", c.ties, ", triangles emitted ", frame.triangles_emitted);
+                c.mismatched, ", ties ", c.ties, ", triangles emitted ", frame.triangles_emitted, ", tests ", frame.tests);
         // §3.3 (back faces only) misses samples exactly in concave creases lit at a grazing angle:
         // reported, bounded; casting every face of closed meshes removes them.
         if (back_faces_only) CHECK(double(c.mismatched) <= 1e-4 * double(c.tested));
@@ -329,15 +380,14 @@ TEST_CASE("directional light: 0 mismatches against the oracle") {
     o.grid_height = 128;
     o.directional_reach = 4.0f * glm::length(b.max - b.min);
     penumbra::AliasFreeHardShadows pipeline(o);
-    pipeline.run(f.input(), f.samples(), light, f.drawer());
-    const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
-    const Comparison c = compareWithOracle(f, light, states, o.coplanar_epsilon, o.directional_reach);
+    const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
+    const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, o.directional_reach);
     MESSAGE("directional: ", c.tested, " samples, ", c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties);
     CHECK(c.shadowed > 100);
     CHECK(c.mismatched == 0);
 }
 
-TEST_CASE("long lists are walked in blocks over several passes with identical results") {
+TEST_CASE("long lists: blocks decided on the GPU give identical results; past max_list_blocks samples are UNTESTED and counted") {
     context();
     Fixture f(penumbra::scene::builtin("hairball"), 96, 96);
     const auto light = pointLight(f, f.scene.light.position);
@@ -347,17 +397,78 @@ TEST_CASE("long lists are walked in blocks over several passes with identical re
         o.grid_width = 24;  // a coarse grid: long lists
         o.grid_height = 24;
         o.list_block = block;
+        o.max_list_blocks = 64;
         penumbra::AliasFreeHardShadows pipeline(o);
-        const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
+        const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
+        const auto frame = pipeline.readFrame();
         CAPTURE(block);
-        CHECK(frame.passes == (frame.statistics.max_list_length + block - 1) / block);
-        const auto states = pipeline.stateBuffer().download<uint32_t>(0, f.samples());
+        const uint32_t needed = (frame.statistics.max_list_length + block - 1) / block;
+        MESSAGE("block ", block, ": longest list ", frame.statistics.max_list_length, ", passes ", frame.passes,
+                ", overflow ", frame.overflow);
         if (one_pass.empty()) {
             one_pass = states;
             CHECK(frame.passes == 1);
-        } else {
+            CHECK(frame.overflow == 0);
+        } else if (needed <= o.max_list_blocks) {
+            CHECK(frame.passes == needed);
             CHECK(frame.passes > 1);
+            CHECK(frame.overflow == 0);
             CHECK(states == one_pass);
+        } else {
+            // Lists longer than the documented bound: the tail is UNTESTED, counted, and the CPU
+            // twin agrees sample for sample.
+            CHECK(frame.passes == o.max_list_blocks);
+            CHECK(frame.overflow > 0);
+            penumbra::SampleListsLight fitted = light;
+            fitted.view_projection = frame.light_view_projection;
+            const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
+            CHECK(states == cpu);
+            size_t untested = 0, changed = 0;
+            for (size_t i = 0; i < states.size(); ++i) {
+                untested += states[i] == PENUMBRA_AFH_UNTESTED && one_pass[i] != PENUMBRA_AFH_UNTESTED;
+                changed += states[i] != one_pass[i] && states[i] != PENUMBRA_AFH_UNTESTED;
+            }
+            CHECK(untested == frame.overflow);
+            CHECK(changed == 0);
+        }
+    }
+}
+
+TEST_CASE("far from the origin: camera-relative coordinates give 0 mismatches at 1e3, 1e5 and 1e6") {
+    context();
+    const penumbra::scene::Scene base = penumbra::scene::builtin("torus_knot");
+    for (double offset : {1e3, 1e5, 1e6}) {
+        CAPTURE(offset);
+        const glm::dvec3 origin(offset, 0.5 * offset, -0.25 * offset);
+        // The world: every position translated in double. The GPU path: camera-relative floats
+        // (relativePosition subtracts the origin in double first); the naive path rounds world
+        // coordinates to float directly.
+        for (int relative = 1; relative >= 0; --relative) {
+            penumbra::scene::Scene scene = base;
+            auto place = [&](const glm::vec3& p) {
+                const glm::dvec3 world = glm::dvec3(p) + origin;
+                return relative ? penumbra::relativePosition(world, origin) : glm::vec3(world);
+            };
+            for (auto& mesh : scene.meshes) {
+                for (auto& p : mesh.positions) p = place(p);
+            }
+            scene.camera.eye = place(scene.camera.eye);
+            scene.camera.target = place(scene.camera.target);
+            scene.light.position = place(scene.light.position);
+            Fixture f(scene, 128, 96);
+            const auto light = pointLight(f, f.scene.light.position);
+            penumbra::AliasFreeHardOptions o;
+            o.grid_width = 128;
+            o.grid_height = 96;
+            penumbra::AliasFreeHardShadows pipeline(o);
+            const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
+            const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f);
+            MESSAGE("origin ", offset, (relative ? " camera-relative" : " absolute floats"), ": ", c.tested, " samples, ",
+                    c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties, ", untested ", c.untested);
+            if (relative) {
+                CHECK(c.tested > 128 * 96 / 8);
+                CHECK(c.mismatched == 0);
+            }
         }
     }
 }
@@ -370,16 +481,18 @@ TEST_CASE("work counters and zero samples") {
     o.grid_width = 64;
     o.grid_height = 64;
     o.count_work = true;
+    o.back_faces_only = true;
     penumbra::AliasFreeHardShadows pipeline(o);
-    const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
+    runPipeline(pipeline, f, light, ViewSamples::Exact);
+    const auto frame = pipeline.readFrame();
     MESSAGE("fragments ", frame.fragments, ", tests ", frame.tests, ", triangles emitted ", frame.triangles_emitted,
             " of ", f.gpu->triangleCount());
     CHECK(frame.fragments > 0);
     CHECK(frame.tests > 0);
     CHECK(frame.triangles_emitted > 0);
     CHECK(frame.triangles_emitted < f.gpu->triangleCount());  // closed torus knot: front faces culled (§3.3)
-    const auto& empty = pipeline.run(f.input(), 0, light, f.drawer());
-    CHECK(empty.passes == 0);
+    REQUIRE(pipeline.run(f.input(), 0, light, f.drawer()) == Status::Ok);
+    CHECK(pipeline.readFrame().passes == 0);
     // The view-sample box skips "no sample" entries (w == 0) and counts the others.
     const std::vector<glm::vec4> some = {{1, 2, 3, 1}, {9, 9, 9, 0}, {-1, 5, 0, 1}};
     size_t counted = 0;
@@ -391,7 +504,59 @@ TEST_CASE("work counters and zero samples") {
     CHECK(counted == 0);
 }
 
-TEST_CASE("bad input is a clear error") {
+TEST_CASE("the caster hook: positions pulled from an SSBO with an instance offset equal attribute input") {
+    context();
+    Fixture f(penumbra::scene::builtin("columns"), 96, 72);
+    const auto light = pointLight(f, f.scene.light.position);
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = 96;
+    o.grid_height = 72;
+    penumbra::AliasFreeHardShadows plain(o);
+    const auto want = runPipeline(plain, f, light, ViewSamples::Exact);
+    // An engine with packed / instanced geometry: vertices in an SSBO of floats, read with
+    // gl_VertexID, shifted by a per-instance offset that cancels the one baked into the buffer.
+    penumbra::ShaderLibrary library = penumbra::ShaderLibrary::embedded();
+    library.add("penumbra/alias_free_hard/caster_position.glsl", R"(
+layout(std430, binding = 6) readonly buffer TestVertices { float testVertices[]; };
+layout(location = 1) uniform vec3 testInstanceOffset;
+vec3 penumbraAfhCasterPosition() {
+    const uint i = uint(gl_VertexID) * 3u;
+    return vec3(testVertices[i], testVertices[i + 1u], testVertices[i + 2u]) + testInstanceOffset;
+}
+)");
+    const auto& P = f.gpu->positions();
+    const auto& I = f.gpu->indices();
+    const glm::vec3 baked(0.25f, -0.5f, 0.125f);  // exact in float: the shift cancels bit for bit
+    std::vector<float> unrolled;
+    for (uint32_t index : I) {
+        const glm::vec3 p = P[index] - baked;
+        unrolled.insert(unrolled.end(), {p.x, p.y, p.z});
+    }
+    penumbra::gl::Buffer vertices = penumbra::gl::Buffer::fromVector(unrolled);
+    penumbra::AliasFreeHardShadows hooked(o, library);
+    hooked.reserve(f.samples());
+    const GLuint vao = [] {
+        GLuint id = 0;
+        glCreateVertexArrays(1, &id);
+        return id;
+    }();
+    GLint program = 0;
+    const auto draw = [&](penumbra::CasterClass cls) {
+        glGetIntegerv(GL_CURRENT_PROGRAM, &program);
+        glProgramUniform3f(GLuint(program), 1, baked.x, baked.y, baked.z);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, vertices.id());
+        glBindVertexArray(vao);
+        for (const auto& r : f.gpu->ranges()) {
+            if (r.closed == (cls == penumbra::CasterClass::Closed)) glDrawArrays(GL_TRIANGLES, GLint(r.first_index), GLsizei(r.index_count));
+        }
+    };
+    REQUIRE(hooked.run(f.input(), f.samples(), light, draw) == Status::Ok);
+    const auto got = hooked.stateBuffer().download<uint32_t>(0, f.samples());
+    glDeleteVertexArrays(1, &vao);
+    CHECK(got == want);
+}
+
+TEST_CASE("bad input: setup throws naming the value, run() returns a Status") {
     context();
     penumbra::AliasFreeHardOptions o;
     CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("grid"), penumbra::Error);
@@ -402,6 +567,9 @@ TEST_CASE("bad input is a clear error") {
     o.list_block = 0;
     CHECK_THROWS_AS(penumbra::AliasFreeHardShadows{o}, penumbra::Error);
     o.list_block = 64;
+    o.max_list_blocks = 65;
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("max_list_blocks 65"), penumbra::Error);
+    o.max_list_blocks = 8;
     CHECK_THROWS_WITH_AS(penumbra::lightViewProjectionForBounds(glm::vec4(0.1f, 0, 0, 1), glm::vec3(-1), glm::vec3(1)),
                          doctest::Contains("inside it"), penumbra::Error);
     CHECK_THROWS_AS(penumbra::lightViewProjectionForBounds(glm::vec4(NAN, 0, 0, 1), glm::vec3(-1), glm::vec3(1)),
@@ -410,14 +578,27 @@ TEST_CASE("bad input is a clear error") {
     penumbra::SampleListsLight directional;
     directional.light = glm::vec4(0, 1, 0, 0);
     penumbra::gl::Buffer positions(16), normals(16);
-    const penumbra::SampleBufferInput input{positions.id(), normals.id()};
+    const penumbra::SampleBufferInput input{{positions.id(), 0, 16}, {normals.id(), 0, 16}};
     auto nothing = [](penumbra::CasterClass) {};
-    CHECK_THROWS_WITH_AS(pipeline.run(input, 1, directional, nothing), doctest::Contains("directional_reach"),
-                         penumbra::Error);
-    directional.light = glm::vec4(0, 2, 0, 0);
-    CHECK_THROWS_WITH_AS(pipeline.run(input, 1, directional, nothing), doctest::Contains("unit"), penumbra::Error);
     penumbra::SampleListsLight point;
     point.light = glm::vec4(0, 2, 0, 1);
-    CHECK_THROWS_AS(pipeline.run(input, 5, point, nothing), penumbra::Error);  // buffers too small
-    CHECK_THROWS_AS(pipeline.run(input, 1, point, {}), penumbra::Error);
+    CHECK(pipeline.run(input, 1, point, nothing) == Status::NotReserved);
+    pipeline.reserve(4);
+    CHECK_NOTHROW(pipeline.validate(input, 1));
+    CHECK(pipeline.run(input, 1, point, nothing) == Status::Ok);
+    CHECK(pipeline.run(input, 1, directional, nothing) == Status::InvalidArgument);  // directional_reach 0
+    directional.light = glm::vec4(0, 2, 0, 0);
+    CHECK(pipeline.run(input, 1, directional, nothing) == Status::InvalidArgument);  // not a unit vector
+    CHECK(pipeline.run(input, 5, point, nothing) == Status::NotReserved);
+    CHECK(pipeline.run(input, 3, point, nothing) == Status::RangeTooSmall);          // 16-byte input ranges
+    CHECK_THROWS_WITH_AS(pipeline.validate(input, 3), doctest::Contains("input positions range holds 16 bytes"),
+                         penumbra::Error);
+    CHECK(pipeline.run(input, 1, point, {}) == Status::InvalidArgument);             // no caster callback
+    point.light.x = NAN;
+    CHECK(pipeline.run(input, 1, point, nothing) == Status::InvalidArgument);
+    // A moved pipeline keeps working.
+    penumbra::AliasFreeHardShadows moved(std::move(pipeline));
+    point.light.x = 0;
+    CHECK(moved.run(input, 1, point, nothing) == Status::Ok);
+    penumbra::gl::checkErrors("bad input");
 }

@@ -573,6 +573,19 @@ inline SampleListsCpu buildSampleListsCpu(const SampleListsSetup& setup, const S
     });
 }
 
+/// The positions the depth input reconstructs (twin of penumbraSampleListsViewPosition; w = 0 for
+/// background), by sample id y * width + x: what the GPU's lists hold for a depth build, e.g. to
+/// ask the oracle about the very same float positions.
+inline std::vector<glm::vec4> reconstructViewSamples(const SampleListsView& view, const float* depth) {
+    std::vector<glm::vec4> out(size_t(view.width) * view.height);
+    for (size_t id = 0; id < out.size(); ++id) {
+        out[id] = detail::viewPosition(view.inverse_view_projection, uint32_t(id % view.width),
+                                       uint32_t(id / view.width), view.width, view.height, depth[id],
+                                       view.depth_zero_to_one);
+    }
+    return out;
+}
+
 /// "" when the two structures are equal modulo the order inside each list (see "Rules"), else
 /// the first difference found.
 inline std::string sampleListsDifference(const SampleListsCpu& a, const SampleListsCpu& b) {

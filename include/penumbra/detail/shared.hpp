@@ -17,6 +17,8 @@ using ivec4 = glm::ivec4;
 using vec2 = glm::vec2;
 using vec4 = glm::vec4;
 using mat4 = glm::mat4;
+using dvec2 = glm::dvec2;
+using dvec4 = glm::dvec4;
 }  // namespace penumbra::shared
 
 #endif

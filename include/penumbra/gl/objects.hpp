@@ -116,6 +116,53 @@ private:
     GLuint id_ = 0;
 };
 
+/// An owned GL name of one kind (framebuffers, vertex arrays, queries, samplers): movable RAII.
+template <void (*Create)(GLsizei, GLuint*), void (*Delete)(GLsizei, const GLuint*)>
+class Name {
+public:
+    Name() = default;
+    static Name create() {
+        Name n;
+        Create(1, &n.id_);
+        return n;
+    }
+    Name(Name&& other) noexcept : id_(std::exchange(other.id_, 0)) {}
+    Name& operator=(Name&& other) noexcept {
+        if (this != &other) {
+            reset();
+            id_ = std::exchange(other.id_, 0);
+        }
+        return *this;
+    }
+    Name(const Name&) = delete;
+    Name& operator=(const Name&) = delete;
+    ~Name() { reset(); }
+    GLuint id() const { return id_; }
+    void reset() {
+        if (id_) Delete(1, &id_);
+        id_ = 0;
+    }
+
+private:
+    GLuint id_ = 0;
+};
+
+namespace detail {
+inline void createFramebuffers(GLsizei n, GLuint* ids) { glCreateFramebuffers(n, ids); }
+inline void deleteFramebuffers(GLsizei n, const GLuint* ids) { glDeleteFramebuffers(n, ids); }
+inline void createVertexArrays(GLsizei n, GLuint* ids) { glCreateVertexArrays(n, ids); }
+inline void deleteVertexArrays(GLsizei n, const GLuint* ids) { glDeleteVertexArrays(n, ids); }
+inline void createOcclusionQueries(GLsizei n, GLuint* ids) { glCreateQueries(GL_ANY_SAMPLES_PASSED, n, ids); }
+inline void deleteQueries(GLsizei n, const GLuint* ids) { glDeleteQueries(n, ids); }
+inline void createSamplers(GLsizei n, GLuint* ids) { glCreateSamplers(n, ids); }
+inline void deleteSamplers(GLsizei n, const GLuint* ids) { glDeleteSamplers(n, ids); }
+}  // namespace detail
+
+using Framebuffer = Name<detail::createFramebuffers, detail::deleteFramebuffers>;
+using VertexArray = Name<detail::createVertexArrays, detail::deleteVertexArrays>;
+using OcclusionQuery = Name<detail::createOcclusionQueries, detail::deleteQueries>;
+using Sampler = Name<detail::createSamplers, detail::deleteSamplers>;
+
 /// GPU time of a region via GL_TIME_ELAPSED (nanoseconds). Regions must not nest.
 class GpuTimer {
 public:

@@ -1,46 +1,28 @@
 // penumbra — alias-free hard shadows (sintorn2008 §3, Fig. 2–4): the first pipeline, composed only
-// from the blocks' public APIs. Use it whole or copy it as a template.
+// from the blocks' public APIs. This header is the GL-free part — options, pure setup (light
+// frustum, conservative setup, parameter blocks) and the CPU twin; the GL executor is
+// penumbra/gl/pipelines/alias_free_hard.hpp (its header comment is the integration summary).
 //
-// Integration summary
-//   needs:    a GL 4.5 context with fp64 in shaders (GL 4.0 core; exact mode) and geometry shaders;
-//             PENUMBRA_GL_HEADER (gl/gl.hpp); the blocks penumbra/sample_lists.hpp (+ scan) and
-//             penumbra/conservative_raster.hpp; shaders penumbra/alias_free_hard/*.
-//   input:    view samples as SSBOs (vec4 world positions, w == 0 = none; vec4 world normals) — e.g.
-//             your G-buffer copied to buffers — their count, the light (SampleListsLight: point,
-//             light.w = 1, or directional, light.w = 0) with a starting view-projection that sees
-//             every sample (lightViewProjectionForBounds() makes one), and a callback that draws
-//             your casters of one class (closed or open) with attribute 0 = world position (vec3)
-//             while the pipeline's program is bound.
-//   produces: one uint state per view-sample id (stateBuffer(): PENUMBRA_AFH_LIT, _SHADOWED,
-//             _BACK_FACING, _NO_SAMPLE, _UNTESTED; alias_free_hard_shared.h), the packed shadow
-//             bit per list slot, the sample lists themselves, Fig. 9 statistics and work counters.
-//   passes:   (1) §4.3 fit the light frustum to the samples (one small read-back), (2) build the
-//             per-texel view-sample lists (count, scan, scatter), (3) statistics -> the longest
-//             list decides how many list blocks (passes) the light pass needs, (4) light pass: every
-//             caster drawn once per block into a W x H framebuffer with no attachments; the
-//             geometry stage culls (closed casters: only light-back-facing triangles cast, §3.3 —
-//             no bias at all) and emits the triangle's conservative coverage; each fragment walks
-//             its texel's list block and ORs the shadow bit of every sample the triangle blocks
-//             (4 planes: supporting plane + 3 planes through the light and each edge), (5) resolve.
-//
-// Exactness. PENUMBRA_AFH_EXACT (AfhPrecision::Exact, default) runs the plane tests in double with
-// the oracle's coplanar rule (blocker_test.glsl): on every (sample, light) pair the oracle does
-// not flag as a tie, the result equals reference::VisibilityOracle::segmentBlocked with the same
-// coplanar_epsilon — tests check 0 mismatches. AfhPrecision::Fast uses float planes and an
-// optional sample offset toward the light; its mismatches are measured, not assumed.
-// Casters: closed (watertight, outward-oriented) meshes cast only light-back-facing triangles
-// (§3.3); open meshes cast every triangle. Samples lying on a surface are never shadowed by it
-// (the coplanar rule), so open receivers need no bias either; `sample_offset` (default 0) moves
-// each sample toward the light by that distance along the caster's plane normal for Fast mode
-// users who prefer a classic bias.
+// Exactness. AfhPrecision::Exact (default) runs the plane tests in double with the oracle's
+// coplanar rule (blocker_test.glsl; the epsilon reaches the GPU in double): on every (sample,
+// light) pair the oracle does not flag as a tie, the result equals
+// reference::VisibilityOracle::segmentBlocked with the same coplanar_epsilon — tests check 0
+// mismatches, on the same float positions the GPU used (buffer or depth-reconstructed samples).
+// AfhPrecision::Fast uses float planes and an optional sample offset toward the light; its
+// mismatches are measured, not assumed.
+// Casters: every triangle casts by default (back_faces_only = false: exact everywhere). The §3.3
+// rule (closed, outward-oriented meshes cast only light-back-facing triangles: half the
+// light-pass work, no bias) is an option: exact for every sample outside a closed mesh, it misses
+// a sample lying exactly in a concave crease lit at a grazing angle that enters the solid right
+// at the sample (measured: 1 of 150 209 samples of the torus knot at 512x384). Samples lying on a
+// surface are never shadowed by it (the coplanar rule), so open receivers need no bias either.
+// Coordinates: view samples, caster positions and the light share one frame. Far from the
+// world origin use a camera- or light-relative frame — subtract a double origin on the host
+// (relativePosition) before anything becomes float; floats of 1e6-sized coordinates carry
+// only ~0.06 units of precision, and no exact test can recover what the rounding lost.
 // Point lights: all samples must lie in front of the light (one frustum; a light inside the
 // scene needs one pipeline run per cube face). Directional lights: each sample's light point is
 // taken `directional_reach` along the light direction: exact for casters within that distance.
-//
-// GL state: changes without restoring the current program, framebuffer binding, viewport, the
-// enables GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_DEPTH_CLAMP (on), GL_RASTERIZER_DISCARD
-// (off), uniform-buffer bindings 0–1, SSBO bindings 0–7 and whatever the sample-list builder and
-// scanner bind. Ends with GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
 #ifndef PENUMBRA_PIPELINES_ALIAS_FREE_HARD_HPP
 #define PENUMBRA_PIPELINES_ALIAS_FREE_HARD_HPP
 
@@ -49,8 +31,6 @@
 
 #include "penumbra/conservative_raster.hpp"
 #include "penumbra/detail/geometry.hpp"
-#include "penumbra/gl/objects.hpp"
-#include "penumbra/gl/shader.hpp"
 #include "penumbra/sample_lists.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -58,6 +38,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <functional>
 #include <limits>
 #include <utility>
@@ -66,7 +47,8 @@
 namespace penumbra {
 
 using AfhParams = shared::PenumbraAfhParams;
-static_assert(sizeof(AfhParams) == 64, "PenumbraAfhParams must be 64 bytes (std140 == std430)");
+static_assert(sizeof(AfhParams) == 80 && offsetof(AfhParams, exact) == 64,
+              "PenumbraAfhParams must be 80 bytes with the dvec2 at 64 (std140 == std430)");
 
 enum class AfhPrecision { Exact, Fast };
 enum class CasterClass { Closed, Open };
@@ -81,28 +63,40 @@ struct AliasFreeHardOptions {
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
     bool fit_frustum = true;         ///< §4.3
     uint32_t list_block = 2048;      ///< samples one fragment walks per pass (llvmpipe caps loops at 65 535)
+    /// Documented upper bound on light-pass blocks (the caster callback runs this many times per
+    /// class; blocks no list needs are skipped on the GPU by conditional rendering). Samples past
+    /// max_list_blocks * list_block in their list come out PENUMBRA_AFH_UNTESTED and are counted
+    /// (AliasFreeHardFrame::overflow). In [1, 64].
+    uint32_t max_list_blocks = 8;
     bool count_work = false;         ///< atomics counting fragments, tests and emitted triangles
     // Skips (each proven bit-identical by the tests): a fragment does not retest a sample another
     // caster already shadowed; fragments outside the triangle's pixel-expanded box are discarded.
     bool skip_shadowed = true;
     bool clip_to_box = true;
-    /// §3.3: closed casters cast only their light-back-facing triangles (half the work). Exact for
-    /// every sample outside a closed mesh; a sample lying exactly in a concave crease of a closed
-    /// surface, lit at a grazing angle that enters the solid right at the sample, is missed (the
-    /// entry is at the segment's excluded endpoint; measured: 1 of 150 209 samples of the torus
-    /// knot at 512x384, 0 in the 256x256 and 512x512 oracle checks). false: closed casters cast
-    /// every triangle like open ones, which equals the oracle there too.
-    bool back_faces_only = true;
+    /// §3.3: closed casters cast only their light-back-facing triangles (about half the light-pass
+    /// work). Off by default: it is exact for every sample outside a closed mesh but misses a
+    /// sample lying exactly in a concave crease of a closed surface, lit at a grazing angle that
+    /// enters the solid right at the sample (the entry is at the segment's excluded endpoint;
+    /// measured: 1 of 150 209 samples of the torus knot at 512x384). Use it when closed meshes
+    /// are watertight and such creases are rare or invisible; leave it off for exact results.
+    bool back_faces_only = false;
 };
 
 /// What one run did.
+/// What one run did: AliasFreeHardShadows::readFrame() reads it back on request (it waits for the
+/// GPU; run() itself reads nothing back).
 struct AliasFreeHardFrame {
     glm::mat4 light_view_projection{1.0f};  ///< the (fitted) matrix the lists and the light pass used
     LightFrustumFit fit;                    ///< valid == false when fitting was off or found no sample
     SampleListStatistics statistics;        ///< Fig. 9, of the lists the light pass walked
-    uint32_t passes = 0;                    ///< list blocks = light-pass draws of every caster
+    uint32_t passes = 0;                    ///< list blocks the GPU drew (<= max_list_blocks)
+    uint64_t overflow = 0;                  ///< samples left untested past the last block
     uint64_t fragments = 0, tests = 0, triangles_emitted = 0;  ///< when count_work
 };
+
+/// p - origin computed in double, then rounded once to float: the camera- or light-relative
+/// coordinates the GPU path needs far from the world origin (see the file comment).
+inline glm::vec3 relativePosition(const glm::dvec3& p, const glm::dvec3& origin) { return glm::vec3(p - origin); }
 
 // ---------------------------------------------------------------------------------------------
 // Pure setup
@@ -202,6 +196,8 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
                    "penumbra::AliasFreeHardShadows: sample_offset ", o.sample_offset, " must be finite and >= 0");
     PENUMBRA_CHECK(o.list_block >= 1 && o.list_block <= 16384,
                    "penumbra::AliasFreeHardShadows: list_block ", o.list_block, " is outside [1, 16384]");
+    PENUMBRA_CHECK(o.max_list_blocks >= 1 && o.max_list_blocks <= 64,
+                   "penumbra::AliasFreeHardShadows: max_list_blocks ", o.max_list_blocks, " is outside [1, 64]");
     PENUMBRA_CHECK(std::isfinite(light.x) && std::isfinite(light.y) && std::isfinite(light.z) &&
                        (light.w == 0.0f || light.w == 1.0f),
                    "penumbra::AliasFreeHardShadows: light must be finite with w = 1 (point) or 0 (directional)");
@@ -215,12 +211,24 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
     }
 }
 
-inline AfhParams afhParams(const AliasFreeHardOptions& o, const glm::vec4& light, uint32_t block, uint32_t flags) {
+/// The per-frame light check of a run (no throw): finite, w = 1, or w = 0 with a unit direction.
+inline bool afhLightValid(const glm::vec4& light) {
+    if (!std::isfinite(light.x) || !std::isfinite(light.y) || !std::isfinite(light.z)) return false;
+    if (light.w == 1.0f) return true;
+    return light.w == 0.0f && std::abs(glm::length(glm::vec3(light)) - 1.0f) < 1e-4f;
+}
+
+/// Samples of one list the light pass walks at most (resolve: later ones are UNTESTED).
+inline uint32_t afhTestedPerList(const AliasFreeHardOptions& o) { return o.list_block * o.max_list_blocks; }
+
+inline AfhParams afhParams(const AliasFreeHardOptions& o, const glm::vec4& light, uint32_t block, uint32_t flags,
+                           uint32_t sample_count = 0) {
     AfhParams p{};
     p.light = light;
-    p.tolerance = glm::vec4(static_cast<float>(o.coplanar_epsilon), o.sample_offset, o.directional_reach, 0.0f);
+    p.tolerance = glm::vec4(0.0f, o.sample_offset, o.directional_reach, 0.0f);
     p.grid = glm::uvec4(o.grid_width, o.grid_height, o.list_block, flags);
-    p.pass = glm::uvec4(block, 0u, 0u, 0u);
+    p.pass = glm::uvec4(block, sample_count, afhTestedPerList(o), 0u);
+    p.exact = glm::dvec2(o.coplanar_epsilon, 0.0);
     return p;
 }
 
@@ -330,7 +338,8 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
         for (int y = y0; y <= y1; ++y) {
             for (int x = x0; x <= x1; ++x) {
                 const size_t list = size_t(y) * options.grid_width + size_t(x);
-                for (uint32_t k = 0; k < lists.counts[list]; ++k) {
+                const uint32_t walked = std::min(lists.counts[list], afhTestedPerList(options));
+                for (uint32_t k = 0; k < walked; ++k) {
                     const uint32_t slot = lists.offsets[list] + k;
                     const uint32_t id = lists.list_ids[slot];
                     if (shadowed[id]) continue;
@@ -352,8 +361,12 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
     }
     std::vector<uint32_t> states(sample_count);
     for (uint32_t id = 0; id < sample_count; ++id) {
-        if (lists.sample_slots[id] != kSampleListsNoSlot) {
-            states[id] = shadowed[id] ? PENUMBRA_AFH_SHADOWED : PENUMBRA_AFH_LIT;
+        const uint32_t slot = lists.sample_slots[id];
+        if (slot != kSampleListsNoSlot) {
+            const uint32_t local = slot - lists.offsets[lists.sample_texels[id]];
+            states[id] = local >= afhTestedPerList(options) ? PENUMBRA_AFH_UNTESTED
+                         : shadowed[id]                     ? PENUMBRA_AFH_SHADOWED
+                                                            : PENUMBRA_AFH_LIT;
         } else {
             const uint32_t reason = lists.sample_texels[id] - PENUMBRA_SAMPLE_LISTS_REJECTED;
             states[id] = reason == PENUMBRA_SAMPLE_LISTS_REASON_BACKGROUND    ? PENUMBRA_AFH_NO_SAMPLE
@@ -363,160 +376,6 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
     }
     return states;
 }
-
-// ---------------------------------------------------------------------------------------------
-// GL execution
-
-/// The pipeline: owns its programs and the list/shadow/state buffers (RAII, movable).
-class AliasFreeHardShadows {
-public:
-    using DrawCasters = std::function<void(CasterClass)>;
-
-    explicit AliasFreeHardShadows(const AliasFreeHardOptions& options,
-                                  const ShaderLibrary& library = ShaderLibrary::embedded())
-        : options_(options), builder_(library) {
-        validateAliasFreeHardOptions(options_, glm::vec4(0, 0, 0, 1));
-        conservative_ = afhConservativeSetup(options_);
-        ShaderDefines defines = conservative_.defines;
-        defines.push_back({"PENUMBRA_AFH_EXACT", options_.precision == AfhPrecision::Exact ? "1" : "0"});
-        defines.push_back({"PENUMBRA_AFH_COUNT_WORK", options_.count_work ? "1" : "0"});
-        defines.push_back({"PENUMBRA_AFH_SKIP_SHADOWED", options_.skip_shadowed ? "1" : "0"});
-        light_pass_ = gl::buildProgram({"penumbra/alias_free_hard/light_pass.vert.glsl",
-                                        "penumbra/alias_free_hard/light_pass.geom.glsl",
-                                        "penumbra/alias_free_hard/light_pass.frag.glsl"},
-                                       defines, library);
-        resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", {}, library);
-        conservative_params_ = gl::Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
-        afh_params_ = gl::Buffer(sizeof(AfhParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        work_ = gl::Buffer(PENUMBRA_AFH_WORK_WORDS * 4);
-        glCreateFramebuffers(1, &framebuffer_);
-        glNamedFramebufferParameteri(framebuffer_, GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
-        glNamedFramebufferParameteri(framebuffer_, GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
-        gl::checkErrors("penumbra::AliasFreeHardShadows");
-    }
-    // Owns a raw GL name (framebuffer): not movable; hold it in a std::unique_ptr to move it.
-    AliasFreeHardShadows(AliasFreeHardShadows&&) = delete;
-    AliasFreeHardShadows(const AliasFreeHardShadows&) = delete;
-    AliasFreeHardShadows& operator=(const AliasFreeHardShadows&) = delete;
-    ~AliasFreeHardShadows() {
-        if (framebuffer_) glDeleteFramebuffers(1, &framebuffer_);
-    }
-
-    const AliasFreeHardOptions& options() const { return options_; }
-
-    /// Runs every pass (see the summary). `light.view_projection` must see all samples that should
-    /// be tested (others come out PENUMBRA_AFH_UNTESTED).
-    const AliasFreeHardFrame& run(const SampleBufferInput& input, uint32_t sample_count, const SampleListsLight& light,
-                                  const DrawCasters& draw_casters) {
-        validateAliasFreeHardOptions(options_, light.light);
-        PENUMBRA_CHECK(static_cast<bool>(draw_casters), "penumbra::AliasFreeHardShadows::run: no caster callback");
-        frame_ = AliasFreeHardFrame{};
-        setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);
-        allocate(setup_);
-        SampleListsOptions list_options;
-        list_options.depth_range = LightDepthRange::Unclipped;
-        SampleListsLight fitted = light;
-        if (options_.fit_frustum && sample_count > 0) {
-            frame_.fit = builder_.fitLightFrustum(setup_, light, input, header_.id(), list_options);
-            if (frame_.fit.valid) fitted.view_projection = frame_.fit.view_projection;
-        }
-        frame_.light_view_projection = fitted.view_projection;
-        builder_.build(setup_, fitted, input, buffers(), list_options);
-        frame_.statistics = builder_.statistics(setup_, buffers());
-        frame_.passes = static_cast<uint32_t>(detail::divUp(frame_.statistics.max_list_length, options_.list_block));
-
-        shadow_.fill(0u);
-        if (options_.count_work) work_.fill(0u);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-        glBindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
-        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
-        glDisable(GL_DEPTH_TEST);
-        glDisable(GL_CULL_FACE);
-        glDisable(GL_RASTERIZER_DISCARD);
-        glEnable(GL_DEPTH_CLAMP);  // casters nearer than the near plane or beyond the far plane still cast
-        light_pass_.use();
-        glUniformMatrix4fv(0, 1, GL_FALSE, glm::value_ptr(fitted.view_projection));
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_AFH_PARAMS_BINDING, afh_params_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_COUNTS_BINDING, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_OFFSETS_BINDING, offsets_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_POSITIONS_BINDING, list_positions_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_SHADOW_BINDING, shadow_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_WORK_BINDING, work_.id());
-        for (uint32_t block = 0; block < frame_.passes; ++block) {
-            for (CasterClass cls : {CasterClass::Closed, CasterClass::Open}) {
-                const bool cull = cls == CasterClass::Closed && options_.back_faces_only;
-                const AfhParams params = afhParams(options_, light.light, block, cull ? PENUMBRA_AFH_FLAG_CLOSED : 0u);
-                glNamedBufferSubData(afh_params_.id(), 0, sizeof params, &params);
-                light_pass_.use();
-                draw_casters(cls);
-            }
-            // Later blocks read the bits earlier ones wrote (the skip of shadowed samples).
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
-        glDisable(GL_DEPTH_CLAMP);
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
-
-        resolve_.use();
-        glUniform1ui(0, sample_count);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_SLOTS_BINDING, sample_slots_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_TEXELS_BINDING, sample_texels_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_SHADOW_BINDING, shadow_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AFH_STATES_BINDING, states_.id());
-        const detail::DispatchGrid grid = detail::foldDispatch(detail::divUp(sample_count, 256));
-        if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-        if (options_.count_work) {
-            const std::vector<uint32_t> work = work_.download<uint32_t>(0, PENUMBRA_AFH_WORK_WORDS);
-            frame_.fragments = work[PENUMBRA_AFH_WORK_FRAGMENTS];
-            frame_.tests = work[PENUMBRA_AFH_WORK_TESTS];
-            frame_.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
-        }
-        gl::checkErrors("penumbra::AliasFreeHardShadows::run");
-        return frame_;
-    }
-
-    const AliasFreeHardFrame& frame() const { return frame_; }
-    /// uint per view-sample id: PENUMBRA_AFH_* states.
-    const gl::Buffer& stateBuffer() const { return states_; }
-    /// The lists of the last run (positions, ids, slots ... see SampleListsBuffers).
-    SampleListsBuffers buffers() const {
-        return {counts_.id(), offsets_.id(), list_positions_.id(), list_ids_.id(), sample_slots_.id(),
-                sample_texels_.id(), header_.id()};
-    }
-    const SampleListsSetup& setup() const { return setup_; }
-    const gl::Buffer& shadowBits() const { return shadow_; }
-
-private:
-    AliasFreeHardOptions options_;
-    SampleListBuilder builder_;
-    ConservativeRasterSetup conservative_;
-    gl::Program light_pass_, resolve_;
-    gl::Buffer conservative_params_, afh_params_, work_;
-    gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, shadow_, states_;
-    size_t capacity_ = size_t(-1);
-    GLuint framebuffer_ = 0;
-    SampleListsSetup setup_;
-    AliasFreeHardFrame frame_;
-
-    void allocate(const SampleListsSetup& s) {
-        if (!header_.id()) {
-            counts_ = gl::Buffer(s.counts_bytes);
-            offsets_ = gl::Buffer(s.offsets_bytes);
-            header_ = gl::Buffer(s.header_bytes);
-        }
-        // Buffers of zero bytes are not created; keep at least one element so bindings stay valid.
-        const size_t samples = std::max<size_t>(s.sample_count, 1);
-        if (capacity_ != size_t(-1) && samples <= capacity_) return;
-        list_positions_ = gl::Buffer(samples * 16);
-        list_ids_ = gl::Buffer(samples * 4);
-        sample_slots_ = gl::Buffer(samples * 4);
-        sample_texels_ = gl::Buffer(samples * 4);
-        shadow_ = gl::Buffer(std::max<size_t>(shadowBitsBytes(samples, 1), 4));
-        states_ = gl::Buffer(samples * 4);
-        capacity_ = samples;
-    }
-};
 
 }  // namespace penumbra
 

@@ -59,7 +59,7 @@ void main() {
     const bool point_light = penumbraAfhParams.light.w != 0.0;
     const penumbraAfhVec3 light = penumbraAfhVec3(penumbraAfhParams.light.xyz);
     const penumbraAfhReal reach = penumbraAfhReal(penumbraAfhParams.tolerance.z);
-    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.tolerance.x);
+    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);
     const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
     uint tests = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {

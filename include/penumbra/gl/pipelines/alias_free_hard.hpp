@@ -1,0 +1,357 @@
+// penumbra — alias-free hard shadows (sintorn2008 §3, Fig. 2–4) on the GPU: the executor of the
+// first pipeline, composed only from the blocks' public APIs (penumbra/gl/sample_lists.hpp, the
+// conservative emitter's GLSL). Options, pure setup and the CPU twin: penumbra/pipelines/
+// alias_free_hard.hpp (no GL). Use it whole or copy it as a template.
+//
+// Integration summary
+//   needs:    a GL 4.5 context with fp64 in shaders (exact mode, GPU fit) and geometry shaders;
+//             PENUMBRA_GL_HEADER (gl/gl.hpp); shaders penumbra/alias_free_hard/*.
+//   setup:    AliasFreeHardShadows(options, library, bindings) compiles everything; reserve(max
+//             samples) allocates the lists, shadow bits, states and queries; validate(input, n)
+//             checks the integrator's ranges/textures once (GL queries, throws).
+//   input:    view samples as ranges of vec4 world positions (w == 0 = none) and vec4 normals
+//             (SampleBufferInput), or the engine's depth buffer + normal texture + inverse
+//             view-projection (SampleDepthInput: positions reconstructed on the GPU, the realistic
+//             input); the light (SampleListsLight: point, light.w = 1, or directional, w = 0) with a
+//             starting view-projection that sees every sample (lightViewProjectionForBounds); and
+//             a callback that draws your casters of one class (closed or open) while the pipeline's
+//             light-pass program is bound. Caster positions reach the vertex stage through the hook
+//             penumbraAfhCasterPosition() (penumbra/alias_free_hard/caster_position.glsl, attribute 0
+//             by default): replace that file in your ShaderLibrary for skinning, instancing or
+//             packed positions. Everything in one frame — relative to a double origin far away.
+//   produces: one uint state per view-sample id (PENUMBRA_AFH_LIT, _SHADOWED, _BACK_FACING,
+//             _NO_SAMPLE, _UNTESTED; alias_free_hard_shared.h) in states() or your range, the
+//             packed shadow bit per list slot, the lists themselves; on request (readFrame(), which
+//             waits for the GPU) the fit, Fig. 9 statistics, passes, overflow and work counters.
+//   per frame: run() — (1) §4.3 fit on the GPU into the frustum block, (2) lists (count, scan,
+//             scatter) + statistics, (3) a predicate pass: one point per list block inside an
+//             occlusion query, surviving when the longest list needs that block, (4) light pass:
+//             for each block b < max_list_blocks, under glBeginConditionalRender(query b), every
+//             caster drawn into a W x H framebuffer with no attachments; the geometry stage culls
+//             (closed casters with back_faces_only: only light-back-facing triangles, §3.3) and
+//             emits the triangle's conservative coverage; each fragment walks its texel's list
+//             block and ORs the shadow bit of every sample the triangle blocks (4 planes), (5)
+//             resolve. Nothing is read back, queried, allocated or thrown: misuse returns a Status.
+//
+// GL state: changes without restoring the current program, the draw framebuffer binding (the
+// pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
+// (off), GL_DEPTH_CLAMP (left on: casters before the near / beyond the far plane still cast), the
+// vertex-array binding (its own empty VAO during the predicate pass; then whatever your callback
+// binds), the uniform-buffer bindings of AfhBindings and 0 (conservative parameters), SSBO
+// bindings of AfhBindings, and whatever the sample-list builder and scanner bind. Ends with
+// GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
+#ifndef PENUMBRA_GL_PIPELINES_ALIAS_FREE_HARD_HPP
+#define PENUMBRA_GL_PIPELINES_ALIAS_FREE_HARD_HPP
+
+#include "penumbra/buffer_range.hpp"
+#include "penumbra/gl/objects.hpp"
+#include "penumbra/gl/sample_lists.hpp"
+#include "penumbra/gl/shader.hpp"
+#include "penumbra/gl/validate.hpp"
+#include "penumbra/pipelines/alias_free_hard.hpp"
+
+#include <cstring>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra {
+
+/// Binding points of the light pass and the resolve; value-initialised = alias_free_hard_shared.h.
+struct AfhBindings {
+    uint32_t params = PENUMBRA_AFH_PARAMS_BINDING;    ///< uniform block
+    uint32_t frustum = PENUMBRA_AFH_FRUSTUM_BINDING;  ///< uniform block
+    uint32_t counts = PENUMBRA_AFH_COUNTS_BINDING;    ///< SSBOs from here on
+    uint32_t offsets = PENUMBRA_AFH_OFFSETS_BINDING;
+    uint32_t positions = PENUMBRA_AFH_POSITIONS_BINDING;
+    uint32_t shadow = PENUMBRA_AFH_SHADOW_BINDING;
+    uint32_t work = PENUMBRA_AFH_WORK_BINDING;
+    uint32_t header = PENUMBRA_AFH_HEADER_BINDING;
+    uint32_t slots = PENUMBRA_AFH_SLOTS_BINDING;
+    uint32_t texels = PENUMBRA_AFH_TEXELS_BINDING;
+    uint32_t states = PENUMBRA_AFH_STATES_BINDING;
+    SampleListsBindings lists{};  ///< the sample-list builder's
+};
+
+/// The pipeline: owns its programs, the list/shadow/state buffers and its GL objects (RAII,
+/// movable, not copyable).
+class AliasFreeHardShadows {
+public:
+    using DrawCasters = std::function<void(CasterClass)>;
+
+    explicit AliasFreeHardShadows(const AliasFreeHardOptions& options,
+                                  const ShaderLibrary& library = ShaderLibrary::embedded(),
+                                  const AfhBindings& bindings = {})
+        : options_(options), bindings_(bindings), builder_(library, {}, bindings.lists) {
+        validateAliasFreeHardOptions(options_, glm::vec4(0, 0, 0, 1));
+        conservative_ = afhConservativeSetup(options_);
+        ShaderDefines defines = conservative_.defines;
+        defines.push_back({"PENUMBRA_AFH_EXACT", options_.precision == AfhPrecision::Exact ? "1" : "0"});
+        defines.push_back({"PENUMBRA_AFH_COUNT_WORK", options_.count_work ? "1" : "0"});
+        defines.push_back({"PENUMBRA_AFH_SKIP_SHADOWED", options_.skip_shadowed ? "1" : "0"});
+        const AfhBindings& b = bindings_;
+        const std::pair<const char*, uint32_t> binding_defines[] = {
+            {"PENUMBRA_AFH_PARAMS_BINDING", b.params}, {"PENUMBRA_AFH_FRUSTUM_BINDING", b.frustum},
+            {"PENUMBRA_AFH_COUNTS_BINDING", b.counts}, {"PENUMBRA_AFH_OFFSETS_BINDING", b.offsets},
+            {"PENUMBRA_AFH_POSITIONS_BINDING", b.positions}, {"PENUMBRA_AFH_SHADOW_BINDING", b.shadow},
+            {"PENUMBRA_AFH_WORK_BINDING", b.work}, {"PENUMBRA_AFH_HEADER_BINDING", b.header},
+            {"PENUMBRA_AFH_SLOTS_BINDING", b.slots}, {"PENUMBRA_AFH_TEXELS_BINDING", b.texels},
+            {"PENUMBRA_AFH_STATES_BINDING", b.states}};
+        for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
+        light_pass_ = gl::buildProgram({"penumbra/alias_free_hard/light_pass.vert.glsl",
+                                        "penumbra/alias_free_hard/light_pass.geom.glsl",
+                                        "penumbra/alias_free_hard/light_pass.frag.glsl"},
+                                       defines, library);
+        blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/alias_free_hard/blocks.frag.glsl"},
+                                   defines, library);
+        resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", defines, library);
+        conservative_params_ = gl::Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
+        ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
+        param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(AfhParams), ubo_alignment_) * ubo_alignment_);
+        params_staging_.assign(size_t(param_stride_) * paramSlots(), 0u);
+        afh_params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        work_ = gl::Buffer(PENUMBRA_AFH_WORK_WORDS * 4);
+        frustum_ = gl::Buffer(sizeof(SampleListsFrustum));
+        framebuffer_ = gl::Framebuffer::create();
+        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
+        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
+        empty_vao_ = gl::VertexArray::create();
+        for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
+        gl::checkErrors("penumbra::AliasFreeHardShadows");
+    }
+    AliasFreeHardShadows(AliasFreeHardShadows&&) noexcept = default;
+    AliasFreeHardShadows& operator=(AliasFreeHardShadows&&) noexcept = default;
+    AliasFreeHardShadows(const AliasFreeHardShadows&) = delete;
+    AliasFreeHardShadows& operator=(const AliasFreeHardShadows&) = delete;
+
+    const AliasFreeHardOptions& options() const { return options_; }
+
+    /// Load time: buffers for up to `max_samples` view samples (lists, shadow bits, states) and the
+    /// builder's scan scratch. Throws penumbra::Error when the count is out of range or GL cannot
+    /// allocate.
+    void reserve(uint32_t max_samples) {
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, max_samples);
+        builder_.reserve(s);
+        if (!counts_.id()) {
+            counts_ = gl::Buffer(s.counts_bytes);
+            offsets_ = gl::Buffer(s.offsets_bytes);
+            header_ = gl::Buffer(s.header_bytes);
+        }
+        // Buffers of zero bytes are not created; keep at least one element so bindings stay valid.
+        const size_t samples = std::max<size_t>(max_samples, 1);
+        if (reserved_ != 0 && samples <= reserved_) return;
+        list_positions_ = gl::Buffer(samples * 16);
+        list_ids_ = gl::Buffer(samples * 4);
+        sample_slots_ = gl::Buffer(samples * 4);
+        sample_texels_ = gl::Buffer(samples * 4);
+        shadow_ = gl::Buffer(std::max<size_t>(shadowBitsBytes(samples, 1), 4));
+        states_ = gl::Buffer(samples * 4);
+        reserved_ = static_cast<uint32_t>(samples);
+        gl::checkErrors("penumbra::AliasFreeHardShadows::reserve");
+    }
+
+    /// Load-time checks of the integrator's inputs (GL queries; throws naming the object).
+    void validate(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& states = {}) const {
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);
+        builder_.validate(s, input, buffers(), listOptions());
+        if (!states.empty()) gl::validateRange(states, uint64_t(sample_count) * 4, "states", "AliasFreeHardShadows::validate");
+    }
+    void validate(const SampleDepthInput& input, const BufferRange& states = {}) const {
+        const uint32_t n = input.view.width * input.view.height;
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, n);
+        builder_.validate(s, input, buffers(), listOptions());
+        if (!states.empty()) gl::validateRange(states, uint64_t(n) * 4, "states", "AliasFreeHardShadows::validate");
+    }
+
+    /// Every pass for buffer input (see the summary). `light.view_projection` must see all samples
+    /// that should be tested (others come out PENUMBRA_AFH_UNTESTED). `states`: where the per-sample
+    /// states go (uint[sample_count]); empty = states().
+    Status run(const SampleBufferInput& input, uint32_t sample_count, const SampleListsLight& light,
+               const DrawCasters& draw_casters, const BufferRange& states = {}) {
+        const Status s = begin(sample_count, light, draw_casters, states);
+        if (s != Status::Ok) return s;
+        const Status built = builder_.build(setup_, light, input, buffers(), listOptions(), listBuild());
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(light, draw_casters, states);
+        return Status::Ok;
+    }
+
+    /// Every pass for depth input (sample count = view width * height; sample id = y * width + x).
+    Status run(const SampleDepthInput& input, const SampleListsLight& light, const DrawCasters& draw_casters,
+               const BufferRange& states = {}) {
+        const uint64_t n = uint64_t(input.view.width) * input.view.height;
+        if (n > reserved_) return fail(Status::NotReserved);
+        const Status s = begin(static_cast<uint32_t>(n), light, draw_casters, states);
+        if (s != Status::Ok) return s;
+        const Status built = builder_.build(setup_, light, input, buffers(), listOptions(), listBuild());
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(light, draw_casters, states);
+        return Status::Ok;
+    }
+
+    /// What the last run did: fit, statistics, passes, overflow, work counters (reads back and
+    /// waits for the GPU — for tools, tests and benchmarks, not for frames).
+    AliasFreeHardFrame readFrame() const {
+        AliasFreeHardFrame f;
+        const SampleListsBuffers b = buffers();
+        const SampleListsFrustum frustum = SampleListBuilder::readFrustum(b.frustum);
+        f.fit = lightFrustumFitFromFrustum(frustum);
+        f.fit.keys = SampleListBuilder::readHeader(b.header);
+        f.light_view_projection = frustum.view_projection;
+        f.statistics = SampleListBuilder::readStatistics(setup_, b);
+        f.passes = static_cast<uint32_t>(
+            std::min<uint64_t>(detail::divUp(f.statistics.max_list_length, options_.list_block), options_.max_list_blocks));
+        const std::vector<uint32_t> work = work_.download<uint32_t>(0, PENUMBRA_AFH_WORK_WORDS);
+        f.overflow = work[PENUMBRA_AFH_WORK_OVERFLOW];
+        f.fragments = work[PENUMBRA_AFH_WORK_FRAGMENTS];
+        f.tests = work[PENUMBRA_AFH_WORK_TESTS];
+        f.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
+        return f;
+    }
+
+    /// uint per view-sample id: PENUMBRA_AFH_* states (when run() was given no range).
+    const gl::Buffer& stateBuffer() const { return states_; }
+    BufferRange states() const { return {states_.id(), 0, states_.size()}; }
+    /// The lists of the last run (positions, ids, slots ... see SampleListsBuffers).
+    SampleListsBuffers buffers() const {
+        auto r = [](const gl::Buffer& b) { return BufferRange{b.id(), 0, b.size()}; };
+        return {r(counts_),       r(offsets_),       r(list_positions_), r(list_ids_),
+                r(sample_slots_), r(sample_texels_), r(header_),         r(frustum_)};
+    }
+    const SampleListsSetup& setup() const { return setup_; }
+    const gl::Buffer& shadowBits() const { return shadow_; }
+    uint32_t reservedSamples() const { return reserved_; }
+
+private:
+    AliasFreeHardOptions options_;
+    AfhBindings bindings_;
+    SampleListBuilder builder_;
+    ConservativeRasterSetup conservative_;
+    gl::Program light_pass_, blocks_, resolve_;
+    gl::Buffer conservative_params_, afh_params_, work_, frustum_;
+    gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, shadow_, states_;
+    gl::Framebuffer framebuffer_;
+    gl::VertexArray empty_vao_;
+    std::vector<gl::OcclusionQuery> block_queries_;
+    std::vector<uint8_t> params_staging_;
+    uint32_t ubo_alignment_ = 256, param_stride_ = 256;
+    uint32_t reserved_ = 0;
+    SampleListsSetup setup_;
+
+    static Status fail(Status s) {
+        PENUMBRA_ASSERT(s == Status::Ok && "penumbra::AliasFreeHardShadows: per-frame misuse (see the returned Status)");
+        return s;
+    }
+
+    // Slot 0: predicate and resolve; slot 1 + 2 b + c: block b, caster class c.
+    uint32_t paramSlots() const { return 1 + 2 * options_.max_list_blocks; }
+
+    SampleListsOptions listOptions() const {
+        SampleListsOptions o;
+        o.depth_range = LightDepthRange::Unclipped;
+        return o;
+    }
+    SampleListsBuild listBuild() const {
+        SampleListsBuild b;
+        b.fit_frustum = options_.fit_frustum;
+        b.statistics = true;  // the predicate pass reads max_list_length
+        return b;
+    }
+
+    Status begin(uint32_t sample_count, const SampleListsLight& light, const DrawCasters& draw_casters,
+                 const BufferRange& states) {
+        if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
+        if (!draw_casters || !afhLightValid(light.light)) return fail(Status::InvalidArgument);
+        if (light.light.w == 0.0f && !(options_.directional_reach > 0.0f)) return fail(Status::InvalidArgument);
+        if (!states.empty() && !states.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
+        // sample_count <= reserved_, which reserve() validated: sampleListsSetup cannot throw here.
+        setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);
+        return Status::Ok;
+    }
+
+    void writeParams(const glm::vec4& light) {
+        auto put = [&](uint32_t slot, const AfhParams& p) {
+            std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
+        };
+        put(0, afhParams(options_, light, 0, 0u, setup_.sample_count));
+        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            for (uint32_t c = 0; c < 2; ++c) {
+                const bool cull = c == 0 && options_.back_faces_only;  // c == 0: closed casters
+                put(1 + 2 * b + c, afhParams(options_, light, b, cull ? PENUMBRA_AFH_FLAG_CLOSED : 0u, setup_.sample_count));
+            }
+        }
+        glNamedBufferSubData(afh_params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
+    }
+
+    void bindParams(uint32_t slot) const {
+        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.params, afh_params_.id(),
+                          static_cast<GLintptr>(size_t(slot) * param_stride_), sizeof(AfhParams));
+    }
+
+    void lightPassAndResolve(const SampleListsLight& light, const DrawCasters& draw_casters, const BufferRange& states) {
+        writeParams(light.light);
+        const uint32_t zero = 0;
+        const uint64_t shadow_bytes = std::max<uint64_t>(shadowBitsBytes(std::max<uint32_t>(setup_.sample_count, 1), 1), 4);
+        glClearNamedBufferSubData(shadow_.id(), GL_R32UI, 0, static_cast<GLsizeiptr>(shadow_bytes), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(work_.id(), GL_R32UI, 0, PENUMBRA_AFH_WORK_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
+        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_RASTERIZER_DISCARD);
+        glEnable(GL_DEPTH_CLAMP);  // casters nearer than the near plane or beyond the far plane still cast
+        // (3) Which list blocks does the longest list need? One point per block, on the GPU.
+        blocks_.use();
+        glBindVertexArray(empty_vao_.id());
+        bindParams(0);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, header_.id(), 0, sizeof(SampleListsHeader));
+        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            glBeginQuery(GL_ANY_SAMPLES_PASSED, block_queries_[b].id());
+            glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
+            glEndQuery(GL_ANY_SAMPLES_PASSED);
+        }
+        // (4) Light pass, block by block; blocks no list needs are skipped by the GPU.
+        light_pass_.use();
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
+        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.frustum, frustum_.id(), 0, sizeof(SampleListsFrustum));
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, counts_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, list_positions_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+            for (uint32_t c = 0; c < 2; ++c) {
+                bindParams(1 + 2 * b + c);
+                light_pass_.use();
+                draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+            }
+            glEndConditionalRender();
+            // Later blocks read the bits earlier ones wrote (the skip of shadowed samples).
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        // (5) Resolve.
+        resolve_.use();
+        bindParams(0);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, sample_slots_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, sample_texels_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        if (states.empty()) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.states, states_.id());
+        } else {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.states, states);
+        }
+        const detail::DispatchGrid grid = detail::foldDispatch(detail::divUp(setup_.sample_count, 256));
+        if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+};
+
+}  // namespace penumbra
+
+#endif
