@@ -42,7 +42,7 @@
 #include <penumbra/detail/dispatch.hpp>
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
-#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/obj.hpp>
@@ -118,8 +118,9 @@ struct Fixture {
         penumbra::AliasFreeHardOptions options = pipelineOptions(penumbra::AfhPrecision::Exact);
         coplanar_epsilon = options.coplanar_epsilon;
         penumbra::AliasFreeHardShadows pipeline(options);
-        const auto& frame = pipeline.run(input(), samples(), light, drawer());
-        fitted_view_projection = frame.light_view_projection;
+        pipeline.reserve(samples());
+        pipeline.run(input(), samples(), light, drawer());
+        fitted_view_projection = pipeline.readFrame().light_view_projection;
         const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, samples());
         std::vector<glm::dvec3> receivers;
         for (uint32_t id = 0; id < samples(); ++id) {
@@ -145,7 +146,10 @@ struct Fixture {
         options.precision = precision;
         return options;
     }
-    penumbra::SampleBufferInput input() const { return {gbuffer->positionBuffer().id(), gbuffer->faceBuffer().id()}; }
+    penumbra::SampleBufferInput input() const {
+        auto r = [](const penumbra::gl::Buffer& b) { return penumbra::BufferRange{b.id(), 0, b.size()}; };
+        return {r(gbuffer->positionBuffer()), r(gbuffer->faceBuffer())};
+    }
     uint32_t samples() const { return size * size; }
     penumbra::AliasFreeHardShadows::DrawCasters drawer() const {
         return [this](penumbra::CasterClass cls) {
@@ -202,6 +206,7 @@ void BM_HardShadows(benchmark::State& state, const std::string& name, penumbra::
     try {
         Fixture& f = fixture(name);
         penumbra::AliasFreeHardShadows pipeline(f.pipelineOptions(precision));
+        pipeline.reserve(f.samples());
         auto run = [&] { pipeline.run(f.input(), f.samples(), f.light, f.drawer()); };
         run();  // warm-up
         double total = 0.0;
@@ -218,7 +223,9 @@ void BM_HardShadows(benchmark::State& state, const std::string& name, penumbra::
             penumbra::AliasFreeHardOptions options = f.pipelineOptions(precision);
             options.count_work = true;
             penumbra::AliasFreeHardShadows counting(options);
-            const auto& frame = counting.run(f.input(), f.samples(), f.light, f.drawer());
+            counting.reserve(f.samples());
+            counting.run(f.input(), f.samples(), f.light, f.drawer());
+            const auto frame = counting.readFrame();
             state.counters["fragments"] = double(frame.fragments);
             state.counters["tests_per_sample"] = f.tested.empty() ? 0.0 : double(frame.tests) / double(f.tested.size());
             state.counters["triangles_emitted"] = double(frame.triangles_emitted);

@@ -1,6 +1,6 @@
 // Shared helpers for penumbra_bench: one GL context for every GL benchmark (created on first use,
-// backend from PENUMBRA_GL), and the smoke flag ctest sets (PENUMBRA_BENCH_SMOKE=1) so each
-// benchmark can shrink its sizes to run once in seconds.
+// backend from PENUMBRA_GL), the smoke flag ctest sets (PENUMBRA_BENCH_SMOKE=1) so each
+// benchmark can shrink its sizes to run once in seconds, and the one GPU timing method.
 #ifndef PENUMBRA_BENCHMARKS_BENCH_COMMON_HPP
 #define PENUMBRA_BENCHMARKS_BENCH_COMMON_HPP
 
@@ -23,16 +23,42 @@ inline bool smokeRun() {
     return env && std::strcmp(env, "1") == 0;
 }
 
-/// Seconds between a glFinish before and after `f`: wall-clock GPU time. llvmpipe answers
-/// GL_TIME_ELAPSED queries with 1 ns, so benchmarks that must run there time this way.
+namespace detail {
+inline bool& timeElapsedMeasures() {
+    static bool measures = false;
+    return measures;
+}
+}  // namespace detail
+
+/// GPU seconds of `f`, the one timing method of every GL benchmark: a GL_TIME_ELAPSED query
+/// around it where the driver really measures the region (the query reports between 5% and 100%
+/// of the wall time between the glFinish()es around it: GPU time lies inside that window), else
+/// that wall time. llvmpipe answers timer queries with 1 ns or with values that are no
+/// durations; it runs on the CPU, so there the finished wall time is the execution time.
+/// timerCounter() says which method the last call used.
 template <typename F>
 double timeGpu(F&& f) {
+    static const GLuint query = [] {
+        GLuint q = 0;
+        glCreateQueries(GL_TIME_ELAPSED, 1, &q);
+        return q;
+    }();
     glFinish();
     const auto start = std::chrono::steady_clock::now();
+    glBeginQuery(GL_TIME_ELAPSED, query);
     f();
+    glEndQuery(GL_TIME_ELAPSED);
     glFinish();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+    const double measured = double(ns) * 1e-9;
+    detail::timeElapsedMeasures() = measured >= 0.05 * wall && measured <= 1.02 * wall;
+    return detail::timeElapsedMeasures() ? measured : wall;
 }
+
+/// Counter value for "timer_gl_time_elapsed": 1 when timeGpu used the GL query, 0 for glFinish + wall clock.
+inline double timerCounter() { return detail::timeElapsedMeasures() ? 1.0 : 0.0; }
 
 }  // namespace penumbra::bench
 

@@ -22,7 +22,7 @@
 
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
-#include <penumbra/sample_lists.hpp>
+#include <penumbra/gl/sample_lists.hpp>
 #include <penumbra/scene/scene.hpp>
 
 #include <benchmark/benchmark.h>
@@ -38,6 +38,7 @@
 namespace {
 
 namespace gl = penumbra::gl;
+using penumbra::bench::timeGpu;
 
 const char* const kGBufferVertex = R"(#version 450
 layout(location = 0) in vec3 benchPosition;
@@ -157,34 +158,29 @@ penumbra::SampleListsLight aimedLight(const penumbra::scene::Scene& scene) {
     return light;
 }
 
-/// Time of `f` on the GPU: GL_TIME_ELAPSED when the driver really measures the region, else the
-/// wall-clock time between glFinish()es. llvmpipe answers every timer query with 1 ns; it runs on
-/// the CPU, so the finished wall time is its execution time. "Really measures" = at least 5% of
-/// the wall time (a hardware timer excludes only submission and glFinish latency).
-template <typename F>
-double timeGpu(gl::GpuTimer& timer, F&& f) {
-    glFinish();
-    const auto start = std::chrono::steady_clock::now();
-    timer.begin();
-    f();
-    timer.end();
-    glFinish();
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double measured = double(timer.nanoseconds()) * 1e-9;
-    return measured >= 0.05 * wall ? measured : wall;
-}
-
 struct ListBuffers {
-    gl::Buffer counts, offsets, list_positions, list_ids, sample_slots, sample_texels, header;
+    gl::Buffer counts, offsets, list_positions, list_ids, sample_slots, sample_texels, header, frustum;
     explicit ListBuffers(const penumbra::SampleListsSetup& s)
         : counts(s.counts_bytes), offsets(s.offsets_bytes), list_positions(s.list_positions_bytes),
           list_ids(s.list_ids_bytes), sample_slots(s.sample_slots_bytes), sample_texels(s.sample_texels_bytes),
-          header(s.header_bytes) {}
+          header(s.header_bytes), frustum(sizeof(penumbra::SampleListsFrustum)) {}
     penumbra::SampleListsBuffers ids() const {
-        return {counts.id(), offsets.id(), list_positions.id(), list_ids.id(), sample_slots.id(), sample_texels.id(),
-                header.id()};
+        auto r = [](const gl::Buffer& b) { return penumbra::BufferRange{b.id(), 0, b.size()}; };
+        return {r(counts),       r(offsets),       r(list_positions), r(list_ids),
+                r(sample_slots), r(sample_texels), r(header),         r(frustum)};
     }
 };
+
+penumbra::SampleListsBuild withFit() {
+    penumbra::SampleListsBuild b;
+    b.fit_frustum = true;
+    return b;
+}
+penumbra::SampleListsBuild withStatistics() {
+    penumbra::SampleListsBuild b;
+    b.statistics = true;
+    return b;
+}
 
 void setStatistics(benchmark::State& state, const penumbra::SampleListStatistics& s, const std::string& suffix = "") {
     state.counters["occupancy" + suffix] = 100.0 * s.occupancy();
@@ -212,8 +208,14 @@ struct Fixture {
           setup(penumbra::sampleListsSetup(w, w, uint64_t(w) * w)), aimed(aimedLight(scene)), fitted(aimed),
           lists(setup) {
         builder.reserve(setup);
-        fitted.view_projection =
-            builder.fitLightFrustum(setup, aimed, gbuffer.input(), lists.header.id()).view_projection;
+        builder.validate(setup, gbuffer.input(), lists.ids());
+        builder.build(setup, aimed, gbuffer.input(), lists.ids(), {}, withFit());
+        fitted.view_projection = penumbra::SampleListBuilder::readFrustum(lists.ids().frustum).view_projection;
+    }
+
+    penumbra::SampleListStatistics statistics() {
+        builder.statistics(setup, lists.ids());
+        return penumbra::SampleListBuilder::readStatistics(setup, lists.ids());
     }
 
     /// 1 when the GPU structure for `light` differs from the CPU twin's (modulo list order).
@@ -232,59 +234,63 @@ void BM_SampleLists(benchmark::State& state, uint32_t w) {
     penumbra::bench::glContext();
     Fixture f("torus_knot", w);
     const double err = f.structureError(f.fitted);
-    gl::GpuTimer timer;
     for (int warm = 0; warm < 2; ++warm) f.builder.build(f.setup, f.fitted, f.gbuffer.input(), f.lists.ids());
     glFinish();
     double seconds = 0.0;
     uint64_t samples = 0;
     for (auto _ : state) {
-        const double s = timeGpu(timer, [&] { f.builder.build(f.setup, f.fitted, f.gbuffer.input(), f.lists.ids()); });
+        const double s = timeGpu([&] { f.builder.build(f.setup, f.fitted, f.gbuffer.input(), f.lists.ids()); });
         state.SetIterationTime(s);
         seconds += s;
         samples += f.setup.sample_count;
     }
     state.counters["samples_per_second"] = seconds > 0 ? double(samples) / seconds : 0.0;
     state.counters["lists"] = f.setup.lists;
-    setStatistics(state, f.builder.statistics(f.setup, f.lists.ids()));
+    setStatistics(state, f.statistics());
     state.counters["err_structure"] = err;
+    state.counters["timer_gl_time_elapsed"] = penumbra::bench::timerCounter();
 }
 
+// The §4.3 fit on the GPU (fit + resolve passes, then the lists built with the fitted frustum in
+// the same call: nothing read back) against the same build with the light's own frustum.
 void BM_SampleListsFit(benchmark::State& state, uint32_t w) {
     penumbra::bench::glContext();
     Fixture f("torus_knot", w);
-    gl::GpuTimer timer;
-    f.builder.dispatchFit(f.setup, f.aimed, f.gbuffer.input(), f.lists.header.id());
-    glFinish();
-    double seconds = 0.0;
+    for (int warm = 0; warm < 2; ++warm) f.builder.build(f.setup, f.aimed, f.gbuffer.input(), f.lists.ids(), {}, withFit());
+    double seconds = 0.0, unfitted = 0.0;
     uint64_t samples = 0;
     for (auto _ : state) {
-        const double s =
-            timeGpu(timer, [&] { f.builder.dispatchFit(f.setup, f.aimed, f.gbuffer.input(), f.lists.header.id()); });
+        const double s = timeGpu([&] { f.builder.build(f.setup, f.aimed, f.gbuffer.input(), f.lists.ids(), {}, withFit()); });
+        state.PauseTiming();
+        unfitted += timeGpu([&] { f.builder.build(f.setup, f.aimed, f.gbuffer.input(), f.lists.ids()); });
+        state.ResumeTiming();
         state.SetIterationTime(s);
         seconds += s;
         samples += f.setup.sample_count;
     }
     state.counters["samples_per_second"] = seconds > 0 ? double(samples) / seconds : 0.0;
-    // err: the GPU fit must equal the CPU twin's bit for bit.
-    const auto gpu = f.builder.fitLightFrustum(f.setup, f.aimed, f.gbuffer.input(), f.lists.header.id());
+    state.counters["fitted_over_unfitted_time"] = unfitted > 0 ? seconds / unfitted : 0.0;
+    // err: the GPU fit must equal the CPU twin's bit for bit (outside the timed region).
+    f.builder.build(f.setup, f.aimed, f.gbuffer.input(), f.lists.ids(), {}, withFit());
+    const auto gpu = penumbra::SampleListBuilder::readFrustum(f.lists.ids().frustum);
     const auto depth = f.gbuffer.downloadDepth();
     const auto normals = f.gbuffer.downloadNormals();
     const auto cpu = penumbra::fitLightFrustumCpu(f.setup, f.aimed, f.gbuffer.view, depth.data(), normals.data());
-    state.counters["err_fit"] = std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0 ? 0 : 1;
-    state.counters["fit_box_area"] = double(gpu.max_uv.x - gpu.min_uv.x) * double(gpu.max_uv.y - gpu.min_uv.y);
+    state.counters["err_fit"] = std::memcmp(&gpu, &cpu.frustum, sizeof gpu) == 0 ? 0 : 1;
+    state.counters["fit_box_area"] = double(gpu.box.z - gpu.box.x) * double(gpu.box.w - gpu.box.y);
+    state.counters["timer_gl_time_elapsed"] = penumbra::bench::timerCounter();
 }
 
 void BM_SampleListsStats(benchmark::State& state, const std::string& scene, uint32_t w) {
     penumbra::bench::glContext();
     Fixture f(scene, w);
     f.builder.build(f.setup, f.aimed, f.gbuffer.input(), f.lists.ids());
-    setStatistics(state, f.builder.statistics(f.setup, f.lists.ids()), "_unfitted");
+    setStatistics(state, f.statistics(), "_unfitted");
     f.builder.build(f.setup, f.fitted, f.gbuffer.input(), f.lists.ids());
-    gl::GpuTimer timer;
     for (auto _ : state) {
-        state.SetIterationTime(timeGpu(timer, [&] { f.builder.dispatchStatistics(f.setup, f.lists.ids()); }));
+        state.SetIterationTime(timeGpu([&] { f.builder.statistics(f.setup, f.lists.ids()); }));
     }
-    setStatistics(state, f.builder.statistics(f.setup, f.lists.ids()));
+    setStatistics(state, f.statistics());
     state.counters["err_structure"] = f.structureError(f.fitted);
 }
 
