@@ -224,7 +224,7 @@ void conservativeTwins() {
             raster_fixed.add(r.uncertain);
         }
     }
-    print("rasterizeConservativeHull(same hulls)", raster_fixed);
+    print("rasterizeConservativeHull(same-hulls)", raster_fixed);
     print("detail::conservativeClip", clip_polygons);
     print("conservativeHull(fixed6)", hull_fixed);
     print("conservativeHull(exact)", hull_exact);
