@@ -165,6 +165,16 @@ void sampleListTwins() {
         }
         addFit(fit_from_keys, penumbra::lightFrustumFitFromHeader(twin_digest::fixedFitKeys(setup, light, scene), light));
     }
+    // Host setup (not a twin): the starting light frustum. The GPU and the twin get the same matrix
+    // from one binary, so this only has to be deterministic within a build; printed as "#".
+    Digest frustum;
+    {
+        const auto [lo, hi] = penumbra::viewSampleBounds(scene.samples.data(), scene.samples.size());
+        for (const penumbra::SampleListsLight& light : lights(scene)) {
+            frustum.add(penumbra::lightViewProjectionForBounds(light.light, lo, hi));
+        }
+    }
+    std::printf("# lightViewProjectionForBounds (host setup) %016llx\n", static_cast<unsigned long long>(frustum.hash));
     print("inputs", inputs);
     print("detail::transformPoint", transform);
     print("detail::classifySample", classify);

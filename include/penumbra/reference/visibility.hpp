@@ -34,7 +34,10 @@
 //     paper's "fall back to higher precision"). The sheared coordinates of a vertex depend only on
 //     the vertex and the ray, so two triangles sharing an edge see exactly opposite edge
 //     functions: a line through a shared edge or vertex is inside at least one of them. Edges
-//     never leak, whatever the compiler's contraction settings.
+//     never leak, whatever the compiler's contraction settings, and the bits do not depend on
+//     them either: no product is fused into an FMA (detail::oracle::mul; checked by
+//     tests/twin_digest.cpp under -march=native -ffp-contract=fast). Exception still open: the
+//     coplanar rule's penumbra::detail::pointTriangleDistance2 (detail/geometry.hpp) contracts.
 //     "The line passes through T" = all edge functions >= 0 or all <= 0, not all == 0. Then
 //     t = T / det as in the paper, and hit(T) = 0 < t < 1.
 //  2. Coplanar rule. Let n = (v1 - v0) x (v2 - v0) and
