@@ -1,9 +1,10 @@
 // The G-buffer helper against the oracle's primary rays: at every pixel centre the rasterised
 // surface and the ray-cast surface must agree (same triangle, or a hit at the same point when the
 // pixel centre lies on a shared edge), and background must match.
-#include <penumbra/gl/headless.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
+
+#include "support/gl_test_support.hpp"
 
 #include <doctest/doctest.h>
 
@@ -11,7 +12,7 @@
 #include <cstring>
 
 TEST_CASE("G-buffer view samples match the oracle's primary rays") {
-    penumbra::gl::HeadlessContext context;
+    penumbra::test::context();
     for (const std::string name : {"torus_knot", "columns"}) {
         CAPTURE(name);
         const penumbra::scene::Scene scene = penumbra::scene::builtin(name);

@@ -5,8 +5,10 @@
 
 #include <doctest/doctest.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 using penumbra::gl::Backend;
@@ -51,6 +53,30 @@ TEST_CASE("contexts can be moved and recreated") {
     b.makeCurrent();
     CHECK(glGetString(GL_VERSION) != nullptr);
     b = HeadlessContext();
+    CHECK(glGetString(GL_VERSION) != nullptr);
+}
+
+TEST_CASE("contexts created and destroyed on several threads at once (shared EGL display count)") {
+    // Each thread owns its context (one current context per thread). The EGL display users are
+    // counted under a lock: a racing count could terminate the display under a live context.
+    HeadlessContext main_context;  // keeps the display alive across the rounds, like a test's context()
+    std::atomic<int> failures{0};
+    for (int round = 0; round < 3; ++round) {
+        std::vector<std::thread> threads;
+        for (int t = 0; t < 3; ++t) {
+            threads.emplace_back([&failures] {
+                try {
+                    HeadlessContext context;
+                    if (!glGetString(GL_VERSION)) ++failures;
+                } catch (...) {
+                    ++failures;
+                }
+            });
+        }
+        for (auto& thread : threads) thread.join();
+    }
+    CHECK(failures.load() == 0);
+    main_context.makeCurrent();
     CHECK(glGetString(GL_VERSION) != nullptr);
 }
 

@@ -8,19 +8,14 @@
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
 
+#include "support/gl_test_support.hpp"
+
 #include <doctest/doctest.h>
 
 #include <numeric>
 #include <random>
 
-namespace {
-
-penumbra::gl::HeadlessContext& context() {
-    static penumbra::gl::HeadlessContext ctx;
-    return ctx;
-}
-
-}  // namespace
+using penumbra::test::context;
 
 TEST_CASE("the driver compiles every entry shader permutation; every shipped file is covered") {
     context();
@@ -74,9 +69,7 @@ TEST_CASE("a compile error names the snippet file and line") {
 
 TEST_CASE("compute copy across the 65 535-group limit") {
     context();
-    const uint32_t seed = std::random_device{}();
-    MESSAGE("seed ", seed);
-    std::mt19937 rng(seed);
+    std::mt19937 rng(penumbra::test::testSeed());
     penumbra::gl::Program copy = penumbra::gl::buildComputeProgram("penumbra/common/copy.comp.glsl");
     for (size_t count : {size_t(0), size_t(1), size_t(255), size_t(256), size_t(257), size_t(65535 * 256 + 3)}) {
         CAPTURE(count);

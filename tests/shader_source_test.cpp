@@ -4,8 +4,10 @@
 
 #include <doctest/doctest.h>
 
-#include <filesystem>
-#include <fstream>
+#include <algorithm>
+#include <cctype>
+#include <string>
+#include <vector>
 
 using penumbra::assembleShader;
 using penumbra::ShaderLibrary;
@@ -20,6 +22,76 @@ ShaderLibrary smallLibrary() {
                                  "#include \"penumbra/a/c.glsl\"\nvoid b() {}\n#endif\n");
     lib.add("penumbra/a/c.glsl", "int c_value = 3;\n");
     return lib;
+}
+
+/// GLSL (and C/C++) text with comments replaced by spaces (newlines kept, so offsets keep lines).
+std::string withoutComments(const std::string& text) {
+    std::string out = text;
+    for (size_t i = 0; i < out.size(); ++i) {
+        if (out.compare(i, 2, "//") == 0) {
+            while (i < out.size() && out[i] != '\n') out[i++] = ' ';
+        } else if (out.compare(i, 2, "/*") == 0) {
+            const size_t end = out.find("*/", i + 2);
+            const size_t stop = end == std::string::npos ? out.size() : end + 2;
+            for (; i < stop; ++i) {
+                if (out[i] != '\n') out[i] = ' ';
+            }
+            --i;
+        }
+    }
+    return out;
+}
+
+/// Integer literals above 0x7FFFFFFF (2147483647) without a u/U suffix: GLSL types an unsuffixed
+/// integer literal as int, so such a value does not fit (a compile error on strict front ends,
+/// silent wrap-around on others; STYLE.md habit 4). Floating-point literals (a '.', an exponent or
+/// an f suffix) are skipped. Returns "line N: literal" per hit.
+std::vector<std::string> unsuffixedLargeLiterals(const std::string& source) {
+    const std::string text = withoutComments(source);
+    std::vector<std::string> hits;
+    auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+    size_t i = 0;
+    while (i < text.size()) {
+        const char c = text[i];
+        if (!std::isdigit(static_cast<unsigned char>(c)) || (i > 0 && (ident(text[i - 1]) || text[i - 1] == '.'))) {
+            ++i;
+            continue;
+        }
+        // A preprocessing number: digits, letters, '.', and an exponent sign.
+        size_t end = i;
+        while (end < text.size() &&
+               (ident(text[end]) || text[end] == '.' ||
+                ((text[end] == '+' || text[end] == '-') && (text[end - 1] == 'e' || text[end - 1] == 'E') &&
+                 !(text[i] == '0' && (text[i + 1] == 'x' || text[i + 1] == 'X'))))) {
+            ++end;
+        }
+        const std::string token = text.substr(i, end - i);
+        i = end;
+        const bool hex = token.size() > 2 && token[0] == '0' && (token[1] == 'x' || token[1] == 'X');
+        std::string digits = hex ? token.substr(2) : token;
+        std::string suffix;
+        while (!digits.empty() && std::isalpha(static_cast<unsigned char>(digits.back())) &&
+               !(hex && std::isxdigit(static_cast<unsigned char>(digits.back())))) {
+            suffix.insert(suffix.begin(), digits.back());
+            digits.pop_back();
+        }
+        if (!hex && (token.find_first_of(".eE") != std::string::npos || suffix.find_first_of("fF") != std::string::npos)) {
+            continue;  // floating point
+        }
+        if (suffix.find_first_of("uU") != std::string::npos || digits.empty()) continue;
+        // Value > 2^31 - 1? Compare without overflow: strip leading zeros, then by length and text.
+        const size_t first = digits.find_first_not_of('0');
+        const std::string value = first == std::string::npos ? "0" : digits.substr(first);
+        const std::string limit = hex ? "7fffffff" : "2147483647";
+        std::string lower = value;
+        for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+        const bool large = lower.size() > limit.size() || (lower.size() == limit.size() && lower > limit);
+        if (large) {
+            const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(end), '\n'));
+            hits.push_back("line " + std::to_string(line) + ": " + token);
+        }
+    }
+    return hits;
 }
 
 size_t count(const std::string& text, const std::string& what) {
@@ -102,7 +174,35 @@ TEST_CASE("embedded table and shaders/ directory hold the same files") {
     CHECK_THROWS_AS(disk.addDirectory("/definitely/not/here"), penumbra::Error);
 }
 
+TEST_CASE("the unsuffixed-literal scan finds what it must and nothing else") {
+    const std::string text = "uint a = 0x80000000;  // 0xFFFFFFFF in a comment\n"
+                             "/* 4294967295 in a block comment */ uint b = 4294967295u;\n"
+                             "float c = 3000000000.0; float d = 5e9; float e = 2147483648.0f; double g = 1e+10;\n"
+                             "int h = 2147483647; int i = 0x7FFFFFFF; uint j = 0XFFFFFFFFU;\n"
+                             "uint k = 2147483648; uint l = 0x00000000FFFFFFFF; vec2 v2 = vec2(1); uint x9 = 9;\n";
+    const std::vector<std::string> hits = unsuffixedLargeLiterals(text);
+    REQUIRE(hits.size() == 3);
+    CHECK(hits[0] == "line 1: 0x80000000");
+    CHECK(hits[1] == "line 5: 2147483648");
+    CHECK(hits[2] == "line 5: 0x00000000FFFFFFFF");
+}
+
 TEST_CASE("every shipped GLSL file is guarded and has no unsuffixed large literals") {
+    // Every file under shaders/ (the embedded table is checked equal to it above), *_shared.h
+    // included: they are GLSL too.
+    ShaderLibrary disk;
+    disk.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/shaders");
+    REQUIRE(disk.size() > 0);
+    size_t scanned = 0;
+    for (const auto& key : disk.keys()) {
+        CAPTURE(key);
+        std::string list;
+        for (const std::string& hit : unsuffixedLargeLiterals(disk.source(key))) list += " [" + hit + "]";
+        INFO("unsuffixed integer literals above 0x7FFFFFFF:", list);
+        CHECK(list.empty());
+        ++scanned;
+    }
+    MESSAGE("scanned ", scanned, " shader files for unsuffixed large literals");
     for (const auto& key : ShaderLibrary::embedded().keys()) {
         CAPTURE(key);
         const std::string& text = ShaderLibrary::embedded().source(key);

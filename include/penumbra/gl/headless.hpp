@@ -73,7 +73,10 @@ using DebugCallback = std::function<void(const DebugMessage&)>;
 struct HeadlessOptions {
     Backend backend = Backend::Auto;  ///< Auto: environment PENUMBRA_GL, else EGL then OSMesa
     bool debug = true;                ///< debug context + KHR_debug output to `on_debug`
-    DebugCallback on_debug;           ///< empty: print high/medium severity messages to stderr
+    DebugCallback on_debug;           ///< empty: print high/medium severity messages to stderr. Called
+                                      ///< on the thread making the GL call (GL_DEBUG_OUTPUT_SYNCHRONOUS
+                                      ///< is enabled), so a callback touching only this context's
+                                      ///< thread's data needs no lock
 };
 
 namespace detail {
@@ -127,17 +130,38 @@ inline thread_local OsMesaApi::GetProcAddress tls_osmesa_get_proc = nullptr;
 
 // eglGetPlatformDisplayEXT returns the same EGLDisplay for the same platform, and eglTerminate
 // would destroy every context on it, so displays are reference-counted across HeadlessContexts.
-inline int& eglDisplayUsers(EGLDisplay display) {
-    static std::mutex mutex;
-    static std::map<EGLDisplay, int> users;
-    std::lock_guard<std::mutex> lock(mutex);
-    return users[display];
+// Contexts may be created and destroyed on different threads (one context per thread): the count
+// is read and written only under the mutex, and the terminate decision is taken under it too.
+// (It used to hand out a reference to the map entry and count outside the lock: a data race.)
+struct EglDisplayUsers {
+    std::mutex mutex;
+    std::map<EGLDisplay, int> users;
+
+    static EglDisplayUsers& instance() {
+        static EglDisplayUsers registry;
+        return registry;
+    }
+};
+
+/// eglInitialize + one more user, atomically with respect to releaseEglDisplay (EGL itself does not
+/// count: an eglTerminate between another thread's eglInitialize and its count would kill the
+/// display under it).
+inline bool initializeEglDisplay(EGLDisplay display, EGLint* major, EGLint* minor) {
+    EglDisplayUsers& registry = EglDisplayUsers::instance();
+    std::lock_guard<std::mutex> lock(registry.mutex);
+    if (!eglInitialize(display, major, minor)) return false;
+    ++registry.users[display];
+    return true;
 }
 
+/// Terminates the display when its last user releases it (under the lock, so a concurrent
+/// acquire either sees the display alive or initialises it again after the terminate).
 inline void releaseEglDisplay(EGLDisplay display) {
-    int& users = eglDisplayUsers(display);
+    EglDisplayUsers& registry = EglDisplayUsers::instance();
+    std::lock_guard<std::mutex> lock(registry.mutex);
+    int& users = registry.users[display];
     if (--users <= 0) {
-        users = 0;
+        registry.users.erase(display);
         eglTerminate(display);
     }
 }
@@ -252,8 +276,7 @@ private:
     std::string tryEglDisplay(EGLDisplay display, bool debug) {
         if (display == EGL_NO_DISPLAY) return "no display";
         EGLint major = 0, minor = 0;
-        if (!eglInitialize(display, &major, &minor)) return eglErrorText("eglInitialize failed");
-        ++detail::eglDisplayUsers(display);
+        if (!detail::initializeEglDisplay(display, &major, &minor)) return eglErrorText("eglInitialize failed");
         const char* extensions = eglQueryString(display, EGL_EXTENSIONS);
         std::string ext = extensions ? extensions : "";
         if (ext.find("EGL_KHR_surfaceless_context") == std::string::npos) {

@@ -34,7 +34,10 @@
 //     paper's "fall back to higher precision"). The sheared coordinates of a vertex depend only on
 //     the vertex and the ray, so two triangles sharing an edge see exactly opposite edge
 //     functions: a line through a shared edge or vertex is inside at least one of them. Edges
-//     never leak, whatever the compiler's contraction settings.
+//     never leak, whatever the compiler's contraction settings, and the bits do not depend on
+//     them either: no product is fused into an FMA (detail::oracle::mul; checked by
+//     tests/twin_digest.cpp under -march=native -ffp-contract=fast). Exception still open: the
+//     coplanar rule's penumbra::detail::pointTriangleDistance2 (detail/geometry.hpp) contracts.
 //     "The line passes through T" = all edge functions >= 0 or all <= 0, not all == 0. Then
 //     t = T / det as in the paper, and hit(T) = 0 < t < 1.
 //  2. Coplanar rule. Let n = (v1 - v0) x (v2 - v0) and
@@ -224,13 +227,42 @@ inline uint32_t popcount32(uint32_t x) {
     return (((x + (x >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24;
 }
 
+// No FMA contraction. GCC contracts a * b + c into an FMA whenever the target has one
+// (-ffp-contract=fast is its default outside strict ISO mode, e.g. with -march=native / -mfma), and
+// clang does within an expression: the oracle's bits would then depend on compiler flags. Every
+// product whose result feeds an addition goes through mul(), whose empty asm makes the rounded
+// product opaque to the optimiser (the same device as sample_lists.hpp's mulRounded). dot3, cross3
+// and length3 are glm::dot / glm::cross / glm::length with the same operation order, so the bits
+// without FMA are unchanged. tests/twin_digest.cpp checks the oracle's outputs under
+// -O3 -march=native -ffp-contract=fast. (The BVH's SAH costs are left alone: the tree shape may
+// change with contraction, the verdicts cannot — they equal the brute-force loop's.)
+inline double mul(double a, double b) {
+    double r = a * b;
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    __asm__("" : "+x"(r));
+#elif defined(__GNUC__) && defined(__aarch64__)
+    __asm__("" : "+w"(r));
+#elif defined(__GNUC__)
+    __asm__("" : "+g"(r));
+#endif
+    return r;
+}
+
+inline double dot3(const glm::dvec3& a, const glm::dvec3& b) { return (mul(a.x, b.x) + mul(a.y, b.y)) + mul(a.z, b.z); }
+
+inline glm::dvec3 cross3(const glm::dvec3& x, const glm::dvec3& y) {
+    return {mul(x.y, y.z) - mul(y.y, x.z), mul(x.z, y.x) - mul(y.z, x.x), mul(x.x, y.y) - mul(y.x, x.y)};
+}
+
+inline double length3(const glm::dvec3& v) { return std::sqrt(dot3(v, v)); }
+
 /// a.x * b.y - a.y * b.x with the exact sign (and exact zero) of the real value. When the two
 /// rounded products differ, monotone rounding already orders the exact products; when they are
 /// equal, their exact rounding errors (std::fma) decide. Antisymmetric in sign: swapping a and b
 /// negates the result's sign exactly, which is the watertightness argument of Woop et al. §3.
 inline double cross2(double ax, double ay, double bx, double by) {
-    const double p1 = ax * by;
-    const double p2 = ay * bx;
+    const double p1 = mul(ax, by);
+    const double p2 = mul(ay, bx);
     if (p1 != p2) return p1 - p2;
     return std::fma(ax, by, -p1) - std::fma(ay, bx, -p2);
 }
@@ -284,7 +316,7 @@ inline bool slabs(const glm::dvec3& lo, const glm::dvec3& hi, const Ray& ray, do
     const glm::dvec3 hi_rel = hi - ray.origin;
     double scale = dir_term;
     for (int k = 0; k < 3; ++k) scale = std::max(scale, std::max(std::fabs(lo_rel[k]), std::fabs(hi_rel[k])));
-    const double grow = inflation * scale;
+    const double grow = mul(inflation, scale);
     for (int k = 0; k < 3; ++k) {
         const double l = lo_rel[k] - grow;
         const double h = hi_rel[k] + grow;
@@ -313,13 +345,13 @@ inline bool nearEdge(double px, double py, double pz, double qx, double qy, doub
     const double ey = qy - py;
     // |P x Q| = |E| * (distance of the origin to the edge's line) and |E|_1 >= |E|_2.
     if (std::fabs(edge_function) > rho * (std::fabs(ex) + std::fabs(ey))) return false;
-    const double length2 = ex * ex + ey * ey;
+    const double length2 = mul(ex, ex) + mul(ey, ey);
     double lambda = 0.0;
-    if (length2 > 0.0) lambda = std::min(1.0, std::max(0.0, -(px * ex + py * ey) / length2));
-    const double dx = px + lambda * ex;
-    const double dy = py + lambda * ey;
-    if (dx * dx + dy * dy > rho * rho) return false;
-    const double t = pz + lambda * (qz - pz);
+    if (length2 > 0.0) lambda = std::min(1.0, std::max(0.0, -(mul(px, ex) + mul(py, ey)) / length2));
+    const double dx = px + mul(lambda, ex);
+    const double dy = py + mul(lambda, ey);
+    if (mul(dx, dx) + mul(dy, dy) > rho * rho) return false;
+    const double t = pz + mul(lambda, qz - pz);
     return t >= -tie_epsilon && t <= 1.0 + tie_epsilon;
 }
 
@@ -337,7 +369,7 @@ inline SegmentQuery makeSegmentQuery(const glm::dvec3& receiver, const glm::dvec
     query.ray.end = sample;
     query.tie_epsilon = options.tie_epsilon;
     query.coplanar_epsilon = options.coplanar_epsilon;
-    query.inflation = 4.0 * options.tie_epsilon + kBoxSlack;
+    query.inflation = mul(4.0, options.tie_epsilon) + kBoxSlack;
     return query;
 }
 
@@ -348,9 +380,9 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     const glm::dvec3 b = tri.v1 - ray.origin;
     const glm::dvec3 c = tri.v2 - ray.origin;
     const int kx = ray.kx, ky = ray.ky, kz = ray.kz;
-    const double ax = a[kx] - ray.sx * a[kz], ay = a[ky] - ray.sy * a[kz];
-    const double bx = b[kx] - ray.sx * b[kz], by = b[ky] - ray.sy * b[kz];
-    const double cx = c[kx] - ray.sx * c[kz], cy = c[ky] - ray.sy * c[kz];
+    const double ax = a[kx] - mul(ray.sx, a[kz]), ay = a[ky] - mul(ray.sy, a[kz]);
+    const double bx = b[kx] - mul(ray.sx, b[kz]), by = b[ky] - mul(ray.sy, b[kz]);
+    const double cx = c[kx] - mul(ray.sx, c[kz]), cy = c[ky] - mul(ray.sy, c[kz]);
     const double u = cross2(cx, cy, bx, by);  // weight of v0 (edge v1 v2)
     const double v = cross2(ax, ay, cx, cy);  // weight of v1 (edge v2 v0)
     const double w = cross2(bx, by, ax, ay);  // weight of v2 (edge v0 v1)
@@ -366,7 +398,7 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     Verdict verdict;
     if (inside) {
         const double det = u + v + w;  // same-sign terms: no cancellation, never 0
-        const double t = (u * az + v * bz + w * cz) / det;
+        const double t = (mul(u, az) + mul(v, bz) + mul(w, cz)) / det;
         verdict.hit = t > 0.0 && t < 1.0;
         verdict.fragile = std::fabs(t) <= eps || std::fabs(t - 1.0) <= eps;
     }
@@ -377,11 +409,11 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     if (!inside && !verdict.fragile) return {};  // the common case: a clear miss
 
     // Rule 2 (coplanar) and rule 3c (plane sides), on the caller's absolute coordinates.
-    const glm::dvec3 n = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
+    const glm::dvec3 n = cross3(tri.v1 - tri.v0, tri.v2 - tri.v0);
     const double reach = query.coplanar_epsilon * scale;
-    const double limit = reach * glm::length(n);
-    const double side_p = glm::dot(n, tri.v0 - ray.origin);
-    const double side_s = glm::dot(n, tri.v0 - ray.end);
+    const double limit = reach * length3(n);
+    const double side_p = dot3(n, tri.v0 - ray.origin);
+    const double side_s = dot3(n, tri.v0 - ray.end);
     // The plane distance is a cheap lower bound of the distance to the triangle itself.
     if (std::fabs(side_p) <= limit && penumbra::detail::pointTriangleDistance2<double>(ray.origin, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
     if (std::fabs(side_s) <= limit && penumbra::detail::pointTriangleDistance2<double>(ray.end, tri.v0, tri.v1, tri.v2) <= reach * reach) return {};
@@ -406,9 +438,9 @@ inline bool intersectRay(const Triangle& tri, const Ray& ray, double t_min, doub
     const glm::dvec3 b = tri.v1 - ray.origin;
     const glm::dvec3 c = tri.v2 - ray.origin;
     const int kx = ray.kx, ky = ray.ky, kz = ray.kz;
-    const double ax = a[kx] - ray.sx * a[kz], ay = a[ky] - ray.sy * a[kz];
-    const double bx = b[kx] - ray.sx * b[kz], by = b[ky] - ray.sy * b[kz];
-    const double cx = c[kx] - ray.sx * c[kz], cy = c[ky] - ray.sy * c[kz];
+    const double ax = a[kx] - mul(ray.sx, a[kz]), ay = a[ky] - mul(ray.sy, a[kz]);
+    const double bx = b[kx] - mul(ray.sx, b[kz]), by = b[ky] - mul(ray.sy, b[kz]);
+    const double cx = c[kx] - mul(ray.sx, c[kz]), cy = c[ky] - mul(ray.sy, c[kz]);
     const double u = cross2(cx, cy, bx, by);
     const double v = cross2(ax, ay, cx, cy);
     const double w = cross2(bx, by, ax, ay);
@@ -416,12 +448,12 @@ inline bool intersectRay(const Triangle& tri, const Ray& ray, double t_min, doub
     const bool positive = u > 0.0 || v > 0.0 || w > 0.0;
     if (negative == positive) return false;
     const double det = u + v + w;
-    const double t = (u * (ray.sz * a[kz]) + v * (ray.sz * b[kz]) + w * (ray.sz * c[kz])) / det;
+    const double t = (mul(u, ray.sz * a[kz]) + mul(v, ray.sz * b[kz]) + mul(w, ray.sz * c[kz])) / det;
     if (!(t > t_min && t < t_max)) return false;
     // A ray lying in the triangle's plane "passes through" its zero-width projection only by
     // rounding, and its t is meaningless: edge-on triangles are invisible to closest hits.
-    const glm::dvec3 n = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
-    if (std::fabs(glm::dot(n, ray.dir)) <= kParallelRay * glm::length(n) * glm::length(ray.dir)) return false;
+    const glm::dvec3 n = cross3(tri.v1 - tri.v0, tri.v2 - tri.v0);
+    if (std::fabs(dot3(n, ray.dir)) <= kParallelRay * length3(n) * length3(ray.dir)) return false;
     glm::dvec3 lo, hi;
     triangleBox(tri, lo, hi);
     double t_near = -std::numeric_limits<double>::infinity();
@@ -803,8 +835,9 @@ private:
             const oracle::Triangle tri{positions[indices[3 * i]], positions[indices[3 * i + 1]],
                                        positions[indices[3 * i + 2]], static_cast<uint32_t>(i)};
             const glm::dvec3 e0 = tri.v1 - tri.v0, e1 = tri.v2 - tri.v1, e2 = tri.v0 - tri.v2;
-            const double longest2 = std::max(glm::dot(e0, e0), std::max(glm::dot(e1, e1), glm::dot(e2, e2)));
-            const double twice_area = glm::length(glm::cross(e0, tri.v2 - tri.v0));
+            const double longest2 =
+                std::max(oracle::dot3(e0, e0), std::max(oracle::dot3(e1, e1), oracle::dot3(e2, e2)));
+            const double twice_area = oracle::length3(oracle::cross3(e0, tri.v2 - tri.v0));
             if (twice_area <= oracle::kDegenerateRelativeArea * longest2) continue;
             triangles.push_back(tri);
         }
