@@ -45,6 +45,21 @@ inline Real opaque(Real r) {
 inline float mulRounded(float a, float b) { return opaque(a * b); }
 inline double mulRounded(double a, double b) { return opaque(a * b); }
 
+/// Component-wise v * s with every product opaque.
+template <typename V, typename Real>
+inline V mulRounded(const V& v, Real s) {
+    V r;
+    for (int i = 0; i < V::length(); ++i) r[i] = mulRounded(v[i], s);
+    return r;
+}
+
+/// ((a.x b.x + a.y b.y) + a.z b.z), products opaque: the order of glm::dot and of GLSL's dot under
+/// `precise`, without fused multiply-adds.
+template <typename V>
+inline auto dotRounded(const V& a, const V& b) {
+    return (mulRounded(a.x, b.x) + mulRounded(a.y, b.y)) + mulRounded(a.z, b.z);
+}
+
 }  // namespace penumbra::detail
 
 #endif

@@ -3,6 +3,8 @@
 #ifndef PENUMBRA_DETAIL_GEOMETRY_HPP
 #define PENUMBRA_DETAIL_GEOMETRY_HPP
 
+#include "penumbra/detail/float_ops.hpp"
+
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
@@ -17,33 +19,35 @@ Real pointTriangleDistance2(const glm::tvec3<Real>& p, const glm::tvec3<Real>& a
                             const glm::tvec3<Real>& c) {
     // Everything relative to the vertices (p - a, p - b, ...): exact translations of the input
     // then give bit-identical distances, as the oracle's far-from-origin rule requires.
+    // Products are opaque (detail/float_ops.hpp): no FMA contraction on any compiler flags.
     using V = glm::tvec3<Real>;
     const V ab = b - a, ac = c - a, ap = p - a;
-    const Real d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    const Real d1 = dotRounded(ab, ap), d2 = dotRounded(ac, ap);
     V d;
     if (d1 <= 0 && d2 <= 0) {
         d = ap;
     } else {
         const V bp = p - b, cp = p - c;
-        const Real d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp), d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-        const Real vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+        const Real d3 = dotRounded(ab, bp), d4 = dotRounded(ac, bp), d5 = dotRounded(ab, cp), d6 = dotRounded(ac, cp);
+        const Real vc = mulRounded(d1, d4) - mulRounded(d3, d2), vb = mulRounded(d5, d2) - mulRounded(d1, d6),
+                   va = mulRounded(d3, d6) - mulRounded(d5, d4);
         if (d3 >= 0 && d4 <= d3) {
             d = bp;
         } else if (d6 >= 0 && d5 <= d6) {
             d = cp;
         } else if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-            d = ap - ab * (d1 / (d1 - d3));
+            d = ap - mulRounded(ab, d1 / (d1 - d3));
         } else if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-            d = ap - ac * (d2 / (d2 - d6));
+            d = ap - mulRounded(ac, d2 / (d2 - d6));
         } else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-            d = bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+            d = bp - mulRounded(V(c - b), (d4 - d3) / ((d4 - d3) + (d5 - d6)));
         } else {
             const Real denom = va + vb + vc;
-            if (!(denom > 0)) return glm::dot(ap, ap);
-            d = ap - ab * (vb / denom) - ac * (vc / denom);
+            if (!(denom > 0)) return dotRounded(ap, ap);
+            d = ap - mulRounded(ab, vb / denom) - mulRounded(ac, vc / denom);
         }
     }
-    return glm::dot(d, d);
+    return dotRounded(d, d);
 }
 
 }  // namespace penumbra::detail

@@ -244,35 +244,38 @@ Real afhMaxAbs(const glm::tvec3<Real>& v) {
 
 template <typename Real>
 Real afhDet(const glm::tvec3<Real>& u, const glm::tvec3<Real>& v, const glm::tvec3<Real>& w) {
-    const Real cx = u.y * v.z - u.z * v.y;
-    const Real cy = u.z * v.x - u.x * v.z;
-    const Real cz = u.x * v.y - u.y * v.x;
-    return cx * w.x + cy * w.y + cz * w.z;
+    using detail::mulRounded;
+    const Real cx = mulRounded(u.y, v.z) - mulRounded(u.z, v.y);
+    const Real cy = mulRounded(u.z, v.x) - mulRounded(u.x, v.z);
+    const Real cz = mulRounded(u.x, v.y) - mulRounded(u.y, v.x);
+    return (mulRounded(cx, w.x) + mulRounded(cy, w.y)) + mulRounded(cz, w.z);
 }
 
 }  // namespace detail
 
 /// The blocker test of blocker_test.glsl, same operations in the same order (Real = double for
-/// the exact mode, float for the fast one).
+/// the exact mode, float for the fast one); every product opaque, so no compiler flag fuses them.
 template <typename Real>
 bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::tvec3<Real>& c,
                const glm::tvec3<Real>& p, const glm::tvec3<Real>& l, Real coplanar_epsilon, Real offset) {
+    using detail::mulRounded;
     const glm::tvec3<Real> ab = b - a, ac = c - a;
-    const Real nx = ab.y * ac.z - ab.z * ac.y;
-    const Real ny = ab.z * ac.x - ab.x * ac.z;
-    const Real nz = ab.x * ac.y - ab.y * ac.x;
+    const Real nx = mulRounded(ab.y, ac.z) - mulRounded(ab.z, ac.y);
+    const Real ny = mulRounded(ab.z, ac.x) - mulRounded(ab.x, ac.z);
+    const Real nz = mulRounded(ab.x, ac.y) - mulRounded(ab.y, ac.x);
     const glm::tvec3<Real> ap = p - a, al = l - a;
-    const Real dp = nx * ap.x + ny * ap.y + nz * ap.z;
-    const Real dl = nx * al.x + ny * al.y + nz * al.z;
+    const Real dp = (mulRounded(nx, ap.x) + mulRounded(ny, ap.y)) + mulRounded(nz, ap.z);
+    const Real dl = (mulRounded(nx, al.x) + mulRounded(ny, al.y)) + mulRounded(nz, al.z);
     if (!((dp < 0 && dl > 0) || (dp > 0 && dl < 0))) return false;
-    const Real nn = nx * nx + ny * ny + nz * nz;
+    const Real nn = (mulRounded(nx, nx) + mulRounded(ny, ny)) + mulRounded(nz, nz);
     const Real scale = std::max(std::max(detail::afhMaxAbs<Real>(a - p), detail::afhMaxAbs<Real>(b - p)),
                                 std::max(detail::afhMaxAbs<Real>(c - p), detail::afhMaxAbs<Real>(l - p)));
-    const Real tol = coplanar_epsilon * scale;
-    const Real threshold = tol * tol * nn;
-    if (dp * dp <= threshold && detail::pointTriangleDistance2<Real>(p, a, b, c) <= tol * tol) return false;
-    if (dl * dl <= threshold && detail::pointTriangleDistance2<Real>(l, a, b, c) <= tol * tol) return false;
-    if (offset > 0 && dp * dp <= offset * offset * nn) return false;
+    const Real tol = mulRounded(coplanar_epsilon, scale);
+    const Real tol2 = mulRounded(tol, tol);
+    const Real threshold = mulRounded(tol2, nn);
+    if (mulRounded(dp, dp) <= threshold && detail::pointTriangleDistance2<Real>(p, a, b, c) <= tol2) return false;
+    if (mulRounded(dl, dl) <= threshold && detail::pointTriangleDistance2<Real>(l, a, b, c) <= tol2) return false;
+    if (offset > 0 && mulRounded(dp, dp) <= mulRounded(mulRounded(offset, offset), nn)) return false;
     const glm::tvec3<Real> la = a - l, lb = b - l, lc = c - l, lp = p - l;
     const Real e0 = detail::afhDet(la, lb, lp), e1 = detail::afhDet(lb, lc, lp), e2 = detail::afhDet(lc, la, lp);
     const bool nonnegative = e0 >= 0 && e1 >= 0 && e2 >= 0;
@@ -347,10 +350,11 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
                     bool blocked;
                     if (options.precision == AfhPrecision::Exact) {
                         const glm::dvec3 p(pf);
-                        const glm::dvec3 l = point ? lpos : p + lpos * reach;
+                        const glm::dvec3 l = point ? lpos : p + detail::mulRounded(lpos, reach);
                         blocked = afhBlocks<double>(a, b, c, p, l, options.coplanar_epsilon, double(options.sample_offset));
                     } else {
-                        const glm::vec3 lf = point ? glm::vec3(light.light) : pf + glm::vec3(light.light) * options.directional_reach;
+                        const glm::vec3 lf = point ? glm::vec3(light.light)
+                                                   : pf + detail::mulRounded(glm::vec3(light.light), options.directional_reach);
                         blocked = afhBlocks<float>(af, bf, cf, pf, lf, static_cast<float>(options.coplanar_epsilon),
                                                    options.sample_offset);
                     }
