@@ -13,6 +13,11 @@
 namespace {
 int g_scan_test_asserts = 0;
 }
+// The counting operator new/delete below are malloc/free pairs; GCC's inliner sees free() on a
+// pointer from "new" and warns at every call site.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
 #define PENUMBRA_ASSERT(cond) ((cond) ? void(0) : void(++g_scan_test_asserts))
 
 #include "shader_catalog.hpp"
@@ -27,7 +32,10 @@ int g_scan_test_asserts = 0;
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <new>
+#include <type_traits>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -1180,6 +1188,189 @@ TEST_CASE("workgroup.glsl: a hook that disagrees with local_size_x fails to comp
     penumbra::gl::checkErrors("group-size mismatch");
 }
 
+
+// ---- Every GL call and heap allocation inside scan(), recorded --------------------------------
+//
+// A wrapping loader: glad 2 calls GL through global function pointers (glad_glGetError, ...), so
+// the test swaps them for counting wrappers; a replaced global operator new counts allocations.
+#ifdef GLAD_GL_H_
+namespace {
+
+bool g_recording = false;
+size_t g_allocations = 0;
+
+constexpr int kMaxHooks = 64;
+struct HookEntry {
+    const char* name = nullptr;
+    bool forbidden = false;  // a query, error read, read-back, map or wait
+    int calls = 0;
+};
+std::array<HookEntry, kMaxHooks> g_hooks;
+int g_hook_count = 0;
+
+template <auto* Slot, typename Fn = std::remove_pointer_t<decltype(Slot)>>
+struct GlHook;
+template <auto* Slot, typename R, typename... A>
+struct GlHook<Slot, R(GLAD_API_PTR*)(A...)> {
+    static inline R(GLAD_API_PTR* original)(A...) = nullptr;
+    static inline int index = -1;
+    static R GLAD_API_PTR hook(A... a) {
+        if (g_recording) ++g_hooks[index].calls;
+        return original(a...);
+    }
+    static void install(const char* name, bool forbidden) {
+        if (!*Slot || index >= 0) return;  // entry point missing in this context, or installed
+        index = g_hook_count++;
+        g_hooks[index].name = name;
+        g_hooks[index].forbidden = forbidden;
+        original = *Slot;
+        *Slot = &hook;
+    }
+};
+
+#define PENUMBRA_TEST_HOOK(fn, forbidden) GlHook<&glad_##fn>::install(#fn, forbidden)
+
+void installGlHooks() {
+    // Forbidden in a per-frame call: queries, error reads, read-backs, maps, waits.
+    PENUMBRA_TEST_HOOK(glGetError, true);
+    PENUMBRA_TEST_HOOK(glGetIntegerv, true);
+    PENUMBRA_TEST_HOOK(glGetInteger64v, true);
+    PENUMBRA_TEST_HOOK(glGetIntegeri_v, true);
+    PENUMBRA_TEST_HOOK(glGetInteger64i_v, true);
+    PENUMBRA_TEST_HOOK(glGetBooleanv, true);
+    PENUMBRA_TEST_HOOK(glGetFloatv, true);
+    PENUMBRA_TEST_HOOK(glGetString, true);
+    PENUMBRA_TEST_HOOK(glGetStringi, true);
+    PENUMBRA_TEST_HOOK(glGetNamedBufferParameteriv, true);
+    PENUMBRA_TEST_HOOK(glGetNamedBufferParameteri64v, true);
+    PENUMBRA_TEST_HOOK(glGetBufferParameteriv, true);
+    PENUMBRA_TEST_HOOK(glIsBuffer, true);
+    PENUMBRA_TEST_HOOK(glIsProgram, true);
+    PENUMBRA_TEST_HOOK(glGetProgramiv, true);
+    PENUMBRA_TEST_HOOK(glGetUniformLocation, true);
+    PENUMBRA_TEST_HOOK(glGetUniformBlockIndex, true);
+    PENUMBRA_TEST_HOOK(glGetProgramResourceIndex, true);
+    PENUMBRA_TEST_HOOK(glGetNamedBufferSubData, true);
+    PENUMBRA_TEST_HOOK(glGetBufferSubData, true);
+    PENUMBRA_TEST_HOOK(glMapBuffer, true);
+    PENUMBRA_TEST_HOOK(glMapBufferRange, true);
+    PENUMBRA_TEST_HOOK(glMapNamedBuffer, true);
+    PENUMBRA_TEST_HOOK(glMapNamedBufferRange, true);
+    PENUMBRA_TEST_HOOK(glFinish, true);
+    PENUMBRA_TEST_HOOK(glFenceSync, true);
+    PENUMBRA_TEST_HOOK(glClientWaitSync, true);
+    PENUMBRA_TEST_HOOK(glGetQueryObjectuiv, true);
+    PENUMBRA_TEST_HOOK(glGetQueryObjectui64v, true);
+    // Allowed; counted to check the recording itself.
+    PENUMBRA_TEST_HOOK(glDispatchCompute, false);
+    PENUMBRA_TEST_HOOK(glMemoryBarrier, false);
+    PENUMBRA_TEST_HOOK(glUseProgram, false);
+    PENUMBRA_TEST_HOOK(glBindBuffersRange, false);
+    PENUMBRA_TEST_HOOK(glBindBufferRange, false);
+    PENUMBRA_TEST_HOOK(glBindBufferBase, false);
+    PENUMBRA_TEST_HOOK(glBindBuffer, false);
+    PENUMBRA_TEST_HOOK(glNamedBufferSubData, false);
+    PENUMBRA_TEST_HOOK(glNamedBufferStorage, false);
+    PENUMBRA_TEST_HOOK(glCreateBuffers, false);
+}
+
+int hookCalls(const char* name) {
+    for (int i = 0; i < g_hook_count; ++i) {
+        if (std::string(g_hooks[i].name) == name) return g_hooks[i].calls;
+    }
+    return -1;
+}
+
+void resetHooks() {
+    for (int i = 0; i < g_hook_count; ++i) g_hooks[i].calls = 0;
+    g_allocations = 0;
+}
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+    if (g_recording) ++g_allocations;
+    if (void* p = std::malloc(size ? size : 1)) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+    if (g_recording) ++g_allocations;
+    if (void* p = std::malloc(size ? size : 1)) return p;
+    throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+TEST_CASE("scan() after warm-up: 0 queries, 0 glGetError, 0 read-backs/maps/waits, 0 heap allocations") {
+    context();
+    installGlHooks();
+    REQUIRE(hookCalls("glGetError") == 0);  // installed
+    penumbra::ScanOptions windowed;
+    windowed.group_size = 32;
+    windowed.items_per_thread = 4;
+    windowed.window_elements = 3 * 128;
+    penumbra::Scanner small(windowed);
+    penumbra::Scanner& big = defaultScanner();
+    const uint64_t max_n = (1u << 20) + 3;
+    penumbra::gl::Buffer a(max_n * 4 + 64), b(max_n * 4 + 64);
+    big.reserve(max_n);
+    small.reserve(20000);
+    struct Run {
+        penumbra::Scanner* scanner;
+        penumbra::ScanKind kind;
+        penumbra::BufferRange in, out;
+        uint64_t n;
+    };
+    const Run runs[] = {
+        {&big, penumbra::ScanKind::Exclusive, {a.id(), 0, max_n * 4}, {b.id(), 0, max_n * 4}, max_n},
+        {&big, penumbra::ScanKind::Inclusive, {a.id(), 4, 40000}, {b.id(), 40, 40000}, 10000},
+        {&big, penumbra::ScanKind::Exclusive, {a.id(), 16, 4}, {a.id(), 16, 4}, 1},
+        {&small, penumbra::ScanKind::Inclusive, {a.id(), 8, 80000}, {b.id(), 12, 80000}, 19999},
+    };
+    for (const Run& r : runs) {
+        CAPTURE(r.n);
+        CAPTURE(r.in.offset);
+        r.scanner->validate(r.in, r.out, r.n);                                    // load time
+        CHECK(r.scanner->scan(r.kind, r.in, r.out, r.n) == penumbra::Status::Ok);  // warm-up
+        const uint64_t dispatches = r.scanner->plan(r.kind, r.in, r.out, r.n).dispatches;
+        resetHooks();
+        g_recording = true;
+        const penumbra::Status status = r.scanner->scan(r.kind, r.in, r.out, r.n);
+        g_recording = false;
+        CHECK(status == penumbra::Status::Ok);
+        CHECK(g_allocations == 0);
+        for (int i = 0; i < g_hook_count; ++i) {
+            if (g_hooks[i].forbidden && g_hooks[i].calls != 0) FAIL(g_hooks[i].name, " called ", g_hooks[i].calls, " times");
+        }
+        CHECK(hookCalls("glDispatchCompute") == static_cast<int>(dispatches));
+        CHECK(hookCalls("glMemoryBarrier") == static_cast<int>(dispatches));
+        CHECK(hookCalls("glNamedBufferSubData") == 1);  // all constants in one upload
+        CHECK(hookCalls("glBindBufferBase") == 0);
+        CHECK(hookCalls("glBindBuffer") == 0);
+        CHECK(hookCalls("glBindBufferRange") == 0);  // glBindBuffersRange: generic bindings untouched
+        CHECK(hookCalls("glBindBuffersRange") > 0);
+        CHECK(hookCalls("glNamedBufferStorage") == 0);
+        CHECK(hookCalls("glCreateBuffers") == 0);
+        CHECK(hookCalls("glUseProgram") <= static_cast<int>(dispatches));
+    }
+    // Misuse: a Status and no GL call at all.
+    resetHooks();
+    g_recording = true;
+    const int asserts = g_scan_test_asserts;
+    const penumbra::Status refused = big.exclusive({a.id(), 0, 4}, {b.id(), 0, 4}, 2);
+    g_recording = false;
+    CHECK(refused == penumbra::Status::RangeTooSmall);
+    CHECK(g_scan_test_asserts == asserts + 1);
+    int total = 0;
+    for (int i = 0; i < g_hook_count; ++i) total += g_hooks[i].calls;
+    CHECK(total == 0);
+    CHECK(g_allocations == 0);
+    penumbra::gl::checkErrors("recorded scans");
+}
+
+#endif
 
 TEST_SUITE("stress") {
     TEST_CASE("GPU scan of 2^26 + 5 and 2^28 elements (windows of GL_MAX_SHADER_STORAGE_BLOCK_SIZE)") {
