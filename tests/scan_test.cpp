@@ -840,7 +840,8 @@ TEST_CASE("other group sizes and items per thread") {
     std::mt19937 rng(seed);
     const std::pair<uint32_t, uint32_t> configs[] = {{32, 4}, {64, 8}, {128, 16}, {512, 4}, {1024, 64}};
     for (bool subgroups : {true, false}) {
-        for (auto [group, items] : configs) {
+        for (const auto& config : configs) {
+            const uint32_t group = config.first, items = config.second;  // (clang: no captured bindings)
             penumbra::ScanOptions options;
             options.group_size = group;
             options.items_per_thread = items;
@@ -1034,8 +1035,14 @@ TEST_CASE("GL state contract: nothing reset, foreign bindings and the engine's q
     moved_bindings.input_vec4 = 1;
     moved_bindings.output_vec4 = 2;
     moved_bindings.constants = 4;
+    // Setup does not drain the engine's GL errors either: construction (compiles, block bindings)
+    // and reserve() (allocation checked by a GL_BUFFER_SIZE query) leave a queued error queued.
+    glBindBuffer(0xDEAD, 0);  // GL_INVALID_ENUM
     penumbra::Scanner rebound(options, penumbra::ShaderLibrary::embedded(), moved_bindings);
     rebound.reserve(n);
+    rebound.validate(rangeOf(source, 0, n), rangeOf(output, 0, n), n);
+    CHECK(glGetError() == GL_INVALID_ENUM);
+    CHECK(glGetError() == GL_NO_ERROR);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, foreign.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, foreign.id());
     glBindBufferBase(GL_UNIFORM_BUFFER, 0, foreign_ubo.id());

@@ -305,8 +305,13 @@ public:
                             "penumbra::Scanner::scan: input and output overlap without being identical");
             return Status::InvalidArgument;
         }
-        // Plan into the storage reserve() sized: no allocation (capacity >= every n <= reserved).
+        // Plan into the storage reserve() sized: no allocation (capacity >= every n <= reserved;
+        // the check below only guards that bound).
         detail::planScanShape(n, kind, input.offset, output.offset, options_, limits_, frame_);
+        if (frame_.dispatches > dispatch_capacity_) {
+            PENUMBRA_ASSERT(frame_.dispatches <= dispatch_capacity_ && "penumbra::Scanner::scan: reserve() bound");
+            return Status::NotReserved;
+        }
         frame_.dispatch_list.clear();
         frame_.constants.clear();
         const uint32_t stride = detail::scanConstantsStride(limits_);
