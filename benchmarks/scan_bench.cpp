@@ -1,25 +1,32 @@
 // Scan throughput against the compute copy of the same bytes (shaders/penumbra/common/copy.comp.glsl),
-// in the same context, and the CPU twin.
+// measured in the same benchmark entry, and the CPU twin.
 //
-// bytes_per_second counts n * 4 bytes read + n * 4 bytes written for BM_Scan and BM_ComputeCopy
-// alike (what a scan must move at least; reduce-then-scan really reads the input twice, so its
-// ceiling is 2/3 of the copy's rate), so BM_Scan / BM_ComputeCopy is the device-independent ratio.
-// GPU time: glFinish before and after the region, wall clock, manual time, after one warm-up run.
-// Counters: err_mismatches = output elements that differ from the CPU twin (copy: from the
-// source) after the timed runs; dispatches = compute dispatches per scan; elements = n. The label
-// names the top pass's workgroup-scan mode; BM_ScanPortable forces the shared-memory one.
-// Example: penumbra_bench --benchmark_filter='BM_(Scan|ComputeCopy)/16777216' --benchmark_repetitions=5
-//          --benchmark_report_aggregates_only=true
+// BM_Scan / BM_ScanPortable: every iteration times one scan and one compute copy of the same n
+// uints (glFinish + wall clock, penumbra::bench::timeGpu; llvmpipe has no usable GL_TIME_ELAPSED),
+// interleaved so both see the same machine state; the iteration time reported is the scan's.
+// Counters:
+//   scan_copy_ratio      bandwidth of the scan / bandwidth of the copy = median copy time / median
+//                        scan time (both move n * 4 bytes in and n * 4 out at least): the
+//                        device-independent figure. Reduce-then-scan reads the input twice, so
+//                        its ceiling is about 2/3.
+//   scan_ms, copy_ms     the two medians.
+//   err_mismatches       scan output elements that differ from scanCpu; err_copy_mismatches the
+//                        copy's against its source (both read back after the timed loop).
+//   dispatches           compute dispatches per scan; bytes_moved: bytes the plan's dispatches
+//                        read and write (tile sums included); elements = n.
+// bytes_per_second counts n * 8 bytes per scan. The label names the top pass's workgroup-scan mode;
+// BM_ScanPortable forces the shared-memory one.
+// Example: penumbra_bench --benchmark_filter='BM_Scan/16777216' --benchmark_repetitions=3
 #include "bench_common.hpp"
 
 #include <penumbra/detail/dispatch.hpp>
 #include <penumbra/gl/objects.hpp>
+#include <penumbra/gl/scan.hpp>
 #include <penumbra/gl/shader.hpp>
-#include <penumbra/scan.hpp>
 
 #include <benchmark/benchmark.h>
 
-#include <chrono>
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -34,30 +41,97 @@ std::vector<uint32_t> benchValues(size_t n) {
 
 using penumbra::bench::timeGpu;
 
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    const size_t h = v.size() / 2;
+    return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
 void setRates(benchmark::State& state, uint64_t n) {
     state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * n * 8));  // -> bytes_per_second
     state.counters["elements"] = static_cast<double>(n);
 }
 
+size_t mismatches(const std::vector<uint32_t>& got, const std::vector<uint32_t>& want) {
+    size_t wrong = got.size() == want.size() ? 0 : want.size();
+    for (size_t i = 0; i < std::min(got.size(), want.size()); ++i) wrong += got[i] != want[i];
+    return wrong;
+}
+
+// Bytes the plan's dispatches read and write: reduce reads its level and writes one sum per tile;
+// the top pass reads and writes its level; the scan pass reads its level and the tile offsets and
+// writes its level.
+double planBytes(const penumbra::ScanPlan& plan) {
+    double bytes = 0;
+    for (size_t i = 0; i < plan.dispatch_list.size(); ++i) {
+        const double count = plan.constants[i].count;
+        const double tiles = static_cast<double>(penumbra::detail::divUp(plan.constants[i].count, plan.items_per_thread));
+        switch (plan.dispatch_list[i].pass) {
+            case penumbra::ScanPass::Reduce: bytes += 4 * count + 4 * tiles; break;
+            case penumbra::ScanPass::Top: bytes += 8 * count; break;
+            case penumbra::ScanPass::Scan: bytes += 8 * count + 4 * tiles; break;
+        }
+    }
+    return bytes;
+}
+
+// The baseline: a uvec4 compute copy of n uints (n a multiple of 4), same dispatch folding.
+class ComputeCopy {
+public:
+    ComputeCopy() : program_(penumbra::gl::buildComputeProgram("penumbra/common/copy.comp.glsl")) {}
+    void run(GLuint source, GLuint destination, uint64_t n) const {
+        const uint64_t quads = n / 4;
+        const penumbra::detail::DispatchGrid grid = penumbra::detail::foldDispatch(penumbra::detail::divUp(quads, 256));
+        program_.use();
+        glUniform1ui(0, static_cast<GLuint>(quads));
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, source);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, destination);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glDispatchCompute(grid.x, grid.y, 1);
+    }
+
+private:
+    penumbra::gl::Program program_;
+};
+
 void runScan(benchmark::State& state, penumbra::Scanner& scanner) {
-    const uint64_t n = static_cast<uint64_t>(state.range(0));
+    static const ComputeCopy copy;
+    const uint64_t n = static_cast<uint64_t>(state.range(0));  // a multiple of 4 (uvec4 copy)
     const std::vector<uint32_t> values = benchValues(n);
     penumbra::gl::Buffer input = penumbra::gl::Buffer::fromVector(values);
-    penumbra::gl::Buffer output(n * 4);
+    penumbra::gl::Buffer output(n * 4), copied(n * 4);
+    const penumbra::BufferRange in{input.id(), 0, n * 4}, out{output.id(), 0, n * 4};
+    // Load time: size and check everything once.
     scanner.reserve(n);
-    scanner.exclusive(input.id(), 0, output.id(), 0, n);  // warm-up
+    scanner.validate(in, out, n);
+    auto scan = [&] {
+        if (scanner.exclusive(in, out, n) != penumbra::Status::Ok) state.SkipWithError("scan refused its input");
+    };
+    auto run_copy = [&] { copy.run(input.id(), copied.id(), n); };
+    scan();  // warm-up
+    run_copy();
+    std::vector<double> scan_times, copy_times;
     for (auto _ : state) {
-        state.SetIterationTime(timeGpu([&] { scanner.exclusive(input.id(), 0, output.id(), 0, n); }));
+        const double t_scan = timeGpu(scan);
+        copy_times.push_back(timeGpu(run_copy));  // not part of the reported iteration time
+        scan_times.push_back(t_scan);
+        state.SetIterationTime(t_scan);
     }
     setRates(state, n);
+    // Read-backs and host checks outside the timed region.
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     std::vector<uint32_t> want(n);
     penumbra::scanCpu(values.data(), want.data(), n, penumbra::ScanKind::Exclusive);
-    const std::vector<uint32_t> got = output.download<uint32_t>();
-    size_t mismatches = 0;
-    for (size_t i = 0; i < n; ++i) mismatches += got[i] != want[i];
-    state.counters["err_mismatches"] = static_cast<double>(mismatches);
-    state.counters["dispatches"] = static_cast<double>(scanner.plan(n).dispatches);
+    state.counters["err_mismatches"] = static_cast<double>(mismatches(output.download<uint32_t>(), want));
+    state.counters["err_copy_mismatches"] = static_cast<double>(mismatches(copied.download<uint32_t>(), values));
+    const double scan_s = median(scan_times), copy_s = median(copy_times);
+    state.counters["scan_ms"] = scan_s * 1e3;
+    state.counters["copy_ms"] = copy_s * 1e3;
+    state.counters["scan_copy_ratio"] = scan_s > 0 ? copy_s / scan_s : 0;
+    const penumbra::ScanPlan plan = scanner.plan(n);
+    state.counters["dispatches"] = static_cast<double>(plan.dispatches);
+    state.counters["bytes_moved"] = planBytes(plan);
     state.SetLabel(penumbra::scanSubgroupsName(scanner.subgroupMode()));
 }
 
@@ -77,37 +151,6 @@ void BM_ScanPortable(benchmark::State& state) {
         return options;
     }());
     runScan(state, scanner);
-}
-
-void BM_ComputeCopy(benchmark::State& state) {
-    penumbra::bench::glContext();
-    static penumbra::gl::Program copy = penumbra::gl::buildComputeProgram("penumbra/common/copy.comp.glsl");
-    const uint64_t n = static_cast<uint64_t>(state.range(0));  // uints; a multiple of 4 (uvec4 copy)
-    const std::vector<uint32_t> values = benchValues(n);
-    penumbra::gl::Buffer source = penumbra::gl::Buffer::fromVector(values);
-    penumbra::gl::Buffer destination(n * 4);
-    const uint64_t quads = n / 4;
-    const penumbra::detail::DispatchGrid grid = penumbra::detail::foldDispatch(penumbra::detail::divUp(quads, 256));
-    auto run = [&] {
-        copy.use();
-        glUniform1ui(copy.uniform("penumbraCopyCount"), static_cast<GLuint>(quads));
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, source.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, destination.id());
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glDispatchCompute(grid.x, grid.y, 1);
-    };
-    run();  // warm-up
-    for (auto _ : state) state.SetIterationTime(timeGpu(run));
-    setRates(state, n);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    const std::vector<uint32_t> got = destination.download<uint32_t>();
-    size_t mismatches = 0;
-    for (size_t i = 0; i < n; ++i) mismatches += got[i] != values[i];
-    state.counters["err_mismatches"] = static_cast<double>(mismatches);
-    state.counters["dispatches"] = 1;
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, 0);
-    glUseProgram(0);
 }
 
 void BM_CpuScan(benchmark::State& state) {
@@ -132,7 +175,6 @@ void scanSizes(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_Scan)->Apply(scanSizes)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScanPortable)->Apply(scanSizes)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ComputeCopy)->Apply(scanSizes)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CpuScan)->Apply(scanSizes)->Unit(benchmark::kMillisecond);
 
 }  // namespace

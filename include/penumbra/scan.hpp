@@ -1,4 +1,4 @@
-// penumbra — prefix sums (scan) of uint buffers on the GPU, and their CPU twin.
+// penumbra — prefix sums (scan) of uint buffers: pure setup, the dispatch plan, and the CPU twin.
 //
 // sintorn2008 §3.1 turns per-texel list counts into list offsets with a scan [Harris, Sengupta,
 // Owens 2007, "Parallel Prefix Sum (Scan) with CUDA", GPU Gems 3 ch. 39]. This block is that scan
@@ -6,17 +6,23 @@
 // exactly what std::exclusive_scan / std::inclusive_scan give on uint32_t.
 //
 // Integration summary
-//   needs:    PENUMBRA_GL_HEADER (see gl/gl.hpp) and, for Scanner, a current GL 4.5 context;
-//             shaders from the embedded table (or a ShaderLibrary you pass).
-//   produces: Scanner::exclusive / inclusive / scan: n uints of one buffer range scanned into
-//             another range (or the same range: in place), n from 0 to kScanMaxElements, byte
-//             offsets that are multiples of 4. scanCpu: the CPU twin (also a fallback).
-//   pure setup (no GL, unit-tested): planScan() — windows, levels, tiles, dispatch grids, scratch
-//             bytes, dispatch count. Define PENUMBRA_SCAN_NO_GL to get only this and scanCpu.
+//   this header: no GL at all (include it anywhere). planScan() is the FidelityFX-style setup: for
+//             n elements (and the kind and byte offsets of the two ranges) it returns the windows
+//             and levels, the scratch size, and the dispatch list — per dispatch the kernel (pass,
+//             scalar or uvec4 addressing), the grid, the PenumbraScanConstants block
+//             (scan_shared.h) and its offset in the constants buffer, and which byte ranges of the
+//             caller's input/output buffers and of the scratch buffer are bound where. An engine
+//             with its own RHI records those dispatches itself (see "Recording a plan" below).
+//             scanCpu: the CPU twin (also a fallback). PENUMBRA_SCAN_NO_GL is no longer needed
+//             (harmless if defined): the GL executor lives in penumbra/gl/scan.hpp.
+//   GL executor: penumbra::Scanner in penumbra/gl/scan.hpp (compiles the kernels, owns scratch and
+//             constants buffers, records the plan with GL 4.5 calls; per-frame scan() allocates,
+//             queries and throws nothing).
 //   GPU code: shaders/penumbra/scan/scan.comp.glsl (reduce, scan and top passes),
 //             scan_subgroups.comp.glsl / scan_ballot.comp.glsl (the top pass on subgroup ops),
 //             workgroup.glsl (penumbraScanWorkgroupExclusive/Inclusive/Reduce for your own
-//             kernels; hook PENUMBRA_SCAN_GROUP_SIZE, see that file), scan_shared.h (constants).
+//             kernels; hook PENUMBRA_SCAN_GROUP_SIZE, checked against gl_WorkGroupSize),
+//             scan_shared.h (constants, bindings, PenumbraScanConstants).
 //
 // Algorithm: reduce-then-scan over tiles of items_per_thread consecutive elements (default 16),
 // one tile per invocation, loaded as uvec4s and reduced or scanned serially in registers.
@@ -29,45 +35,34 @@
 // coroutine switch per barrier) that is most of the speed — and each level shrinks the data
 // items_per_thread-fold, so the levels above the first add ~7% of its traffic. GL_MAX_SHADER_STORAGE_BLOCK_SIZE
 // (llvmpipe: 128 MiB = 2^25 uints) bounds one binding, so larger inputs run in windows; the top
-// pass of each window carries the running total to the next through a scratch word, and a ragged
-// last 1-3 elements run as their own window so the uvec4 kernels only see whole uvec4s. Grids of
-// more than GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups are folded into 2D (detail::foldDispatch).
+// pass of each window carries the running total to the next through two alternating scratch
+// words (window w reads word w % 2, writes word (w + 1) % 2), and a ragged last 1-3 elements run
+// as their own window so the uvec4 kernels only see whole uvec4s. Grids of more than
+// GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups are folded into 2D (detail::foldDispatch).
 //
-// GL state contract of Scanner::scan / exclusive / inclusive (n > 0):
-//   * the first dispatch is preceded by glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT), so shader
-//     writes you made to the input in earlier dispatches/draws (SSBO, image or atomic-counter
-//     stores) are visible; writes through glBufferSubData / copies / clears need nothing;
-//   * the scanner's compute dispatches are separated by the same barrier, and none follows the
-//     last one: before you read the output issue the barrier for how you read it —
-//     GL_SHADER_STORAGE_BARRIER_BIT for SSBO reads in shaders, GL_BUFFER_UPDATE_BARRIER_BIT for
-//     glGetBufferSubData / mapping, GL_COMMAND_BARRIER_BIT for indirect draws/dispatches,
-//     GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT / GL_ELEMENT_ARRAY_BARRIER_BIT for vertex or index pulls,
-//     GL_UNIFORM_BARRIER_BIT for UBO reads;
-//   * it changes and does not restore: the current program (left at 0, glUseProgram(0)); the
-//     indexed GL_SHADER_STORAGE_BUFFER bindings 0, 1, 2, 3, 4 (PENUMBRA_SCAN_BINDING_*; left
-//     unbound) and the generic GL_SHADER_STORAGE_BUFFER binding (left 0). Nothing else (no VAO,
-//     framebuffer, texture, image or uniform-block state); uniforms live in its own programs;
-//   * n == 0 returns at once and touches no GL state (buffer names are not checked then).
-//   Scratch (tile sums, the window carry) lives in one buffer the Scanner owns; scan() grows it
-//   when needed — call reserve(n) at load time to keep allocations out of frames. Constructing a
-//   Scanner that picks a subgroup path runs a small check scan (its own buffers; the same state
-//   changes as a scan).
-//
-// Errors (penumbra::Error naming the value): a name that is not a buffer object, a buffer with
-// no storage (GL_BUFFER_SIZE 0), an offset that is not a multiple of 4, a range past
-// GL_BUFFER_SIZE, n > kScanMaxElements, input and output ranges in the same buffer that overlap
-// without being identical, bad ScanOptions (group size not a power of two in [32, driver maximum],
-// items per thread not a multiple of 4 in [4, 64], window_elements below one group's worth).
+// Recording a plan (what Scanner does; tests/scan_test.cpp replays a plan with raw GL calls):
+//   once: compile scan.comp.glsl for each (pass, vec4) the plan uses, with PENUMBRA_SCAN_PASS,
+//         PENUMBRA_SCAN_GROUP_SIZE = plan.group_size, PENUMBRA_SCAN_ITEMS_PER_THREAD =
+//         plan.items_per_thread, PENUMBRA_SCAN_VEC4 = 0/1 (the top pass may use
+//         scan_subgroups/scan_ballot.comp.glsl instead); a scratch buffer of plan.scratch_bytes
+//         (contents need no initialisation) and a uniform buffer of plan.constants_bytes.
+//   per scan: upload plan.constants[i] at plan.dispatch_list[i].constants.offset (stride
+//         plan.constants_stride, a multiple of ScanLimits::uniform_alignment); then for every
+//         dispatch, in order: bind its ranges (input/output also at the *_VEC4 bindings when
+//         dispatch.vec4; a range with buffer ScanBuffer::None binds nothing), bind the program,
+//         memory barrier (GL_SHADER_STORAGE_BARRIER_BIT, or your RHI's UAV barrier), dispatch
+//         grid.x * grid.y * 1 groups. Offsets of ScanBuffer::Input / Output ranges are absolute
+//         byte offsets in your buffers (they start up to alignment - 4 bytes before your range:
+//         binding offsets must be aligned; the shift constants skip the slack).
 #ifndef PENUMBRA_SCAN_HPP
 #define PENUMBRA_SCAN_HPP
 
 #include "penumbra/detail/dispatch.hpp"
 #include "penumbra/detail/shared.hpp"
 #include "penumbra/error.hpp"
-#include "penumbra/buffer_range.hpp"
 
-// scan_shared.h holds only macros. It lives with the shaders; with shaders/ on the include path
-// it is found there, otherwise beside this header in the source tree.
+// scan_shared.h lives with the shaders; with shaders/ on the include path it is found there,
+// otherwise beside this header in the source tree.
 #if defined(__has_include) && __has_include(<penumbra/scan/scan_shared.h>)
 #include <penumbra/scan/scan_shared.h>
 #else
@@ -75,16 +70,20 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
-#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 namespace penumbra {
 
-struct ScanBindings {};
+static_assert(sizeof(shared::PenumbraScanConstants) == 32, "PenumbraScanConstants: 8 uints, std140 = C++ layout");
+static_assert(std::is_trivially_copyable_v<shared::PenumbraScanConstants>);
+static_assert(offsetof(shared::PenumbraScanConstants, carry_out_index) == 20 &&
+              offsetof(shared::PenumbraScanConstants, flags) == 24);
 
 enum class ScanKind { Exclusive, Inclusive };
 
@@ -115,13 +114,14 @@ struct ScanOptions {
 };
 
 /// Driver limits a plan respects. Value-initialised = the GL 4.5 guaranteed minima (and the
-/// largest allowed binding alignment), which every driver satisfies.
+/// largest allowed binding alignments), which every driver satisfies.
 struct ScanLimits {
     uint64_t max_binding_bytes = uint64_t(1) << 27;          ///< GL_MAX_SHADER_STORAGE_BLOCK_SIZE
     uint32_t binding_alignment = 256;                        ///< GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT
     uint64_t max_groups_x = detail::kMaxGroupsPerDimension;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     uint64_t max_groups_y = detail::kMaxGroupsPerDimension;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[1]
     uint32_t max_group_size = 1024;  ///< min(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS, ..._SIZE[0])
+    uint32_t uniform_alignment = 256;  ///< GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT (constants stride)
 };
 
 /// One level of one window: `count` elements in `tiles` tiles (one per invocation).
@@ -136,15 +136,85 @@ struct ScanLevel {
     uint64_t partials_offset = 0;
 };
 
+/// Most levels one window can have: counts up to 2^32 shrink at least 4-fold per level until they
+/// fit one group's worth (>= 32 * 4 elements), i.e. 13 levels plus the top.
+inline constexpr size_t kScanMaxLevels = 16;
+
+/// The levels of one window: a fixed-capacity list (planning allocates nothing).
+class ScanLevels {
+public:
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+    const ScanLevel& operator[](size_t i) const { return levels_[i]; }
+    const ScanLevel& back() const { return levels_[size_ - 1]; }
+    const ScanLevel* begin() const { return levels_.data(); }
+    const ScanLevel* end() const { return levels_.data() + size_; }
+    void clear() { size_ = 0; }
+    void push_back(const ScanLevel& level) {
+        PENUMBRA_ASSERT(size_ < kScanMaxLevels);
+        if (size_ < kScanMaxLevels) levels_[size_++] = level;
+    }
+
+private:
+    std::array<ScanLevel, kScanMaxLevels> levels_{};
+    size_t size_ = 0;
+};
+
+/// The kernel of a dispatch (the PENUMBRA_SCAN_PASS define).
+enum class ScanPass : uint32_t {
+    Reduce = PENUMBRA_SCAN_PASS_REDUCE,
+    Scan = PENUMBRA_SCAN_PASS_SCAN,
+    Top = PENUMBRA_SCAN_PASS_TOP
+};
+
+inline const char* scanPassName(ScanPass pass) {
+    return pass == ScanPass::Reduce ? "reduce" : pass == ScanPass::Scan ? "scan" : "top";
+}
+
+/// Which buffer a dispatch's binding views.
+enum class ScanBuffer : uint32_t {
+    None,       ///< nothing bound (the kernel does not touch that block in this dispatch)
+    Input,      ///< the caller's input buffer
+    Output,     ///< the caller's output buffer (== input buffer for an in-place scan)
+    Scratch,    ///< the scratch buffer (plan.scratch_bytes)
+    Constants   ///< the uniform buffer of all dispatches' PenumbraScanConstants
+};
+
+/// A byte range of one of the scan's buffers, bound as one block.
+struct ScanBinding {
+    ScanBuffer buffer = ScanBuffer::None;
+    uint64_t offset = 0;  ///< absolute byte offset in that buffer (a multiple of plan.alignment / the uniform alignment)
+    uint64_t size = 0;    ///< bytes
+};
+
+/// One compute dispatch of a plan.
+struct ScanDispatch {
+    ScanPass pass = ScanPass::Top;
+    bool vec4 = false;              ///< uvec4 addressing (PENUMBRA_SCAN_VEC4 = 1): input/output also at the *_VEC4 bindings
+    detail::DispatchGrid grid;      ///< grid.x * grid.y * 1 work groups
+    uint32_t window = 0;            ///< which window / level of the plan it works on
+    uint32_t level = 0;
+    ScanBinding input;              ///< SSBO at PENUMBRA_SCAN_BINDING_INPUT (and _INPUT_VEC4 when vec4)
+    ScanBinding output;             ///< SSBO at PENUMBRA_SCAN_BINDING_OUTPUT (and _OUTPUT_VEC4); None for reduce
+    ScanBinding partials;           ///< SSBO at PENUMBRA_SCAN_BINDING_PARTIALS: the scratch, or None
+    ScanBinding constants;          ///< UBO at PENUMBRA_SCAN_BINDING_CONSTANTS: this dispatch's block
+};
+
 /// Everything the GPU scan of n elements will do, computed without GL.
 ///
 /// Windows: the first main_windows windows hold n - tail_elements elements in chunks of
 /// window_elements (the last may be shorter); when n > 4 is not a multiple of 4, one more window
 /// holds the last tail_elements (1 to 3) elements, so every main window's count is a multiple of 4
 /// and the uvec4 kernels never meet a partial uvec4. Window w > 0 starts from the running total
-/// window w - 1 left in the carry word (scratch offset 0).
+/// window w - 1 left in carry word w % 2 (scratch word w % 2).
+///
+/// dispatch_list / constants: the dispatches in recording order for the kind and byte offsets
+/// planScan was given (both empty for n == 0), constants[i] belonging to dispatch_list[i].
 struct ScanPlan {
     uint64_t n = 0;
+    ScanKind kind = ScanKind::Exclusive;
+    uint64_t input_offset = 0;      ///< byte offsets of the ranges (multiples of 4)
+    uint64_t output_offset = 0;
     uint32_t group_size = 0;        ///< resolved options
     uint32_t items_per_thread = 0;
     uint64_t top_elements = 0;      ///< group_size * items_per_thread: what the top pass scans at most
@@ -153,16 +223,20 @@ struct ScanPlan {
     uint64_t main_windows = 0;      ///< ceil((n - tail_elements) / window_elements)
     uint64_t tail_elements = 0;     ///< 0, or n % 4 when n > 4 and n % 4 != 0
     uint64_t windows = 0;           ///< main_windows + (tail_elements != 0)
-    std::vector<ScanLevel> levels;       ///< a full main window (the first); levels.back().top
-    std::vector<ScanLevel> last_levels;  ///< the last main window (== levels when main_windows == 1)
-    std::vector<ScanLevel> tail_levels;  ///< the tail window: one top level, or empty
-    uint64_t scratch_bytes = 0;     ///< carry word (at 0, padded to alignment) + tile-sum arrays
-    uint64_t dispatches = 0;        ///< compute dispatches in total
+    ScanLevels levels;              ///< a full main window (the first); levels.back().top
+    ScanLevels last_levels;         ///< the last main window (== levels when main_windows == 1)
+    ScanLevels tail_levels;         ///< the tail window: one top level, or empty
+    uint64_t scratch_bytes = 0;     ///< carry words (at 0, padded to alignment) + tile-sum arrays
+    uint64_t dispatches = 0;        ///< compute dispatches in total (== dispatch_list.size())
+    uint32_t constants_stride = 0;  ///< bytes between dispatches' constants: 32 rounded up to uniform_alignment
+    uint64_t constants_bytes = 0;   ///< the uniform buffer: dispatches * constants_stride
+    std::vector<ScanDispatch> dispatch_list;
+    std::vector<shared::PenumbraScanConstants> constants;
 
     /// First element of window w.
     uint64_t windowFirst(uint64_t w) const { return w < main_windows ? w * window_elements : n - tail_elements; }
     /// The levels of window w.
-    const std::vector<ScanLevel>& windowLevels(uint64_t w) const {
+    const ScanLevels& windowLevels(uint64_t w) const {
         return w >= main_windows ? tail_levels : w + 1 == main_windows ? last_levels : levels;
     }
 };
@@ -179,6 +253,10 @@ static_assert(kScanDefaultItemsPerThread % 4 == 0 && kScanDefaultItemsPerThread 
 // workgroup.glsl keeps one uint per invocation plus the total in shared memory, and at most one
 // segment or subgroup sum per invocation: (2 * 1024 + 1) * 4 bytes fits GL's 32 KiB minimum.
 static_assert((2 * kScanMaxGroupSize + 1) * 4 <= 32768);
+// The carry words fit the first 16 bytes of scratch (alignment is at least 16).
+static_assert(PENUMBRA_SCAN_CARRY_WORDS * 4 <= 16);
+// kScanMaxLevels: 2^32 elements, 4 per tile, top level >= 32 * 4: 2^32 / 4^13 <= 128.
+static_assert(kScanMaxLevels >= 14);
 
 inline constexpr bool isPowerOfTwo(uint64_t x) { return x != 0 && (x & (x - 1)) == 0; }
 inline constexpr uint64_t alignUp(uint64_t x, uint64_t a) { return divUp(x, a) * a; }
@@ -189,6 +267,10 @@ inline uint64_t gcd64(uint64_t a, uint64_t b) {
 /// lcm(16, binding alignment): uvec4 views need 16-byte-aligned binding offsets as well.
 inline uint64_t scanAlignment(const ScanLimits& limits) {
     return 16 / gcd64(16, limits.binding_alignment) * limits.binding_alignment;
+}
+/// Bytes between two dispatches' constants in the uniform buffer.
+inline uint32_t scanConstantsStride(const ScanLimits& limits) {
+    return static_cast<uint32_t>(alignUp(sizeof(shared::PenumbraScanConstants), limits.uniform_alignment));
 }
 
 /// ScanOptions with defaults filled in; throws penumbra::Error naming a bad value.
@@ -207,19 +289,29 @@ inline ScanOptions resolveScanOptions(const ScanOptions& options, const ScanLimi
     return r;
 }
 
-/// Levels of one window of `count` elements; the first tile-sum array starts at `offset` bytes,
-/// `*end_offset` receives the end of the last one.
-inline std::vector<ScanLevel> planScanLevels(uint64_t count, uint64_t items, uint64_t group_size,
-                                             uint64_t alignment, const ScanLimits& limits, uint64_t offset,
-                                             uint64_t* end_offset) {
-    std::vector<ScanLevel> levels;
-    while (count > 0) {
+/// foldDispatch without its checks, for plans whose limits were validated already (the
+/// per-frame path must not throw). Same grid as foldDispatch.
+inline DispatchGrid foldScanGrid(uint64_t groups, uint64_t max_x) {
+    DispatchGrid grid;
+    grid.groups = groups;
+    if (groups == 0) return grid;
+    const uint64_t y = divUp(groups, max_x);
+    grid.x = static_cast<uint32_t>(divUp(groups, y));
+    grid.y = static_cast<uint32_t>(y);
+    return grid;
+}
+
+/// Levels of one window of `count` elements into `levels`; the first tile-sum array starts at
+/// `offset` bytes; returns the end of the last one. Allocates and throws nothing.
+inline uint64_t planScanLevels(uint64_t count, uint64_t items, uint64_t group_size, uint64_t alignment,
+                               const ScanLimits& limits, uint64_t offset, ScanLevels& levels) {
+    levels.clear();
+    while (count > 0 && levels.size() < kScanMaxLevels) {
         ScanLevel level;
         level.count = count;
         level.tiles = divUp(count, items);
         level.top = count <= items * group_size;
-        level.grid = foldDispatch(level.top ? 1 : divUp(level.tiles, group_size), limits.max_groups_x,
-                                  limits.max_groups_y);
+        level.grid = foldScanGrid(level.top ? 1 : divUp(level.tiles, group_size), limits.max_groups_x);
         if (!level.top) {
             level.partials_offset = offset;
             offset += alignUp(level.tiles * 4, alignment);
@@ -228,63 +320,213 @@ inline std::vector<ScanLevel> planScanLevels(uint64_t count, uint64_t items, uin
         if (level.top) break;
         count = level.tiles;
     }
-    if (end_offset) *end_offset = offset;
-    return levels;
+    return offset;
 }
 
-}  // namespace detail
-
-/// Pure setup: what a scan of n elements does under `options` and `limits` (no GL). Throws
-/// penumbra::Error for n > kScanMaxElements, bad options, or limits too small for one group.
-inline ScanPlan planScan(uint64_t n, const ScanOptions& options = {}, const ScanLimits& limits = {}) {
-    PENUMBRA_CHECK(n <= kScanMaxElements, "penumbra: scan of n = ", n, " elements exceeds kScanMaxElements = ",
-                   kScanMaxElements);
+/// Checks options and limits once (throws penumbra::Error naming the bad value) and returns the
+/// resolved options; what every later planScanShape / forEachScanDispatch call relies on.
+inline ScanOptions validateScanSetup(const ScanOptions& options, const ScanLimits& limits) {
     PENUMBRA_CHECK(limits.binding_alignment > 0 && limits.binding_alignment % 4 == 0,
                    "penumbra: ScanLimits::binding_alignment ", limits.binding_alignment,
                    " is not a positive multiple of 4");
-    const ScanOptions resolved = detail::resolveScanOptions(options, limits);
-    ScanPlan plan;
+    PENUMBRA_CHECK(limits.uniform_alignment > 0, "penumbra: ScanLimits::uniform_alignment must be positive");
+    PENUMBRA_CHECK(limits.max_groups_x > 0 && limits.max_groups_y > 0, "penumbra: dispatch limits must be positive");
+    const ScanOptions resolved = resolveScanOptions(options, limits);
+    const uint64_t top = uint64_t(resolved.group_size) * resolved.items_per_thread;
+    const uint64_t slack = scanAlignment(limits) / 4 - 1;
+    const uint64_t fit = limits.max_binding_bytes / 4 > slack ? limits.max_binding_bytes / 4 - slack : 0;
+    PENUMBRA_CHECK(fit / top > 0, "penumbra: GL_MAX_SHADER_STORAGE_BLOCK_SIZE ", limits.max_binding_bytes,
+                   " cannot hold one scan group's ", top, " elements");
+    PENUMBRA_CHECK(resolved.window_elements == 0 || resolved.window_elements / top > 0,
+                   "penumbra: ScanOptions::window_elements ", resolved.window_elements, " is smaller than one group's ",
+                   top, " elements");
+    return resolved;
+}
+
+/// The windows, levels and scratch of a scan of n <= kScanMaxElements elements with options
+/// already resolved by validateScanSetup (no checks, no allocation, no exception). Leaves the
+/// dispatch list and constants of `plan` untouched.
+inline void planScanShape(uint64_t n, ScanKind kind, uint64_t input_offset, uint64_t output_offset,
+                          const ScanOptions& resolved, const ScanLimits& limits, ScanPlan& plan) {
     plan.n = n;
+    plan.kind = kind;
+    plan.input_offset = input_offset;
+    plan.output_offset = output_offset;
     plan.group_size = resolved.group_size;
     plan.items_per_thread = resolved.items_per_thread;
     plan.top_elements = uint64_t(resolved.group_size) * resolved.items_per_thread;
-    plan.alignment = static_cast<uint32_t>(detail::scanAlignment(limits));
+    plan.alignment = static_cast<uint32_t>(scanAlignment(limits));
+    plan.constants_stride = scanConstantsStride(limits);
     // A window's binding starts up to alignment - 4 bytes before its first element.
     const uint64_t slack = plan.alignment / 4 - 1;
     const uint64_t fit = limits.max_binding_bytes / 4 > slack ? limits.max_binding_bytes / 4 - slack : 0;
     uint64_t window = fit / plan.top_elements * plan.top_elements;
-    PENUMBRA_CHECK(window > 0, "penumbra: GL_MAX_SHADER_STORAGE_BLOCK_SIZE ", limits.max_binding_bytes,
-                   " cannot hold one scan group's ", plan.top_elements, " elements");
     if (resolved.window_elements != 0) {
-        const uint64_t wanted = resolved.window_elements / plan.top_elements * plan.top_elements;
-        PENUMBRA_CHECK(wanted > 0, "penumbra: ScanOptions::window_elements ", resolved.window_elements,
-                       " is smaller than one group's ", plan.top_elements, " elements");
-        window = std::min(window, wanted);
+        window = std::min(window, resolved.window_elements / plan.top_elements * plan.top_elements);
     }
     plan.window_elements = window;
-    if (n == 0) return plan;
     plan.tail_elements = (n > 4 && n % 4 != 0) ? n % 4 : 0;
     const uint64_t main = n - plan.tail_elements;
-    plan.main_windows = detail::divUp(main, window);
+    plan.main_windows = n == 0 ? 0 : divUp(main, window);
     plan.windows = plan.main_windows + (plan.tail_elements != 0);
+    plan.levels.clear();
+    plan.last_levels.clear();
+    plan.tail_levels.clear();
+    plan.scratch_bytes = 0;
+    plan.dispatches = 0;
+    plan.constants_bytes = 0;
+    if (n == 0) return;
     const uint64_t items = plan.items_per_thread, group = plan.group_size;
-    uint64_t end = 0;
-    plan.levels = detail::planScanLevels(std::min(main, window), items, group, plan.alignment, limits, plan.alignment,
-                                         &end);
-    plan.last_levels = plan.main_windows == 1
-                           ? plan.levels
-                           : detail::planScanLevels(main - (plan.main_windows - 1) * window, items, group,
-                                                    plan.alignment, limits, plan.alignment, nullptr);
-    if (plan.tail_elements) {
-        plan.tail_levels =
-            detail::planScanLevels(plan.tail_elements, items, group, plan.alignment, limits, plan.alignment, nullptr);
+    const uint64_t end =
+        planScanLevels(std::min(main, window), items, group, plan.alignment, limits, plan.alignment, plan.levels);
+    if (plan.main_windows == 1) {
+        plan.last_levels = plan.levels;
+    } else {
+        planScanLevels(main - (plan.main_windows - 1) * window, items, group, plan.alignment, limits, plan.alignment,
+                       plan.last_levels);
     }
-    // Scratch: the carry word (windows > 1) and the tile-sum arrays (levels > 1); the first window
-    // is the largest, so its layout bounds every window's.
+    if (plan.tail_elements) {
+        planScanLevels(plan.tail_elements, items, group, plan.alignment, limits, plan.alignment, plan.tail_levels);
+    }
+    // Scratch: the carry words (windows > 1) and the tile-sum arrays (levels > 1); the first
+    // window is the largest, so its layout bounds every window's.
     plan.scratch_bytes = (plan.levels.size() > 1 || plan.windows > 1) ? end : 0;
+    for (uint64_t w = 0; w < plan.windows; ++w) plan.dispatches += 2 * plan.windowLevels(w).size() - 1;
+    plan.constants_bytes = plan.dispatches * plan.constants_stride;
+}
+
+/// Calls emit(const ScanDispatch&, const shared::PenumbraScanConstants&) for every dispatch of a
+/// plan whose shape planScanShape filled, in recording order. Allocates and throws nothing: the
+/// one definition of the dispatch list (planScan collects it, Scanner records it).
+template <typename Emit>
+void forEachScanDispatch(const ScanPlan& plan, Emit&& emit) {
+    const uint64_t alignment = plan.alignment;
+    auto shiftOf = [&](uint64_t offset) { return static_cast<uint32_t>(offset % alignment / 4); };
+    // Both shifts are the same for every window (main windows start whole groups' worth of
+    // elements apart, multiples of 16 bytes; the tail window has a count below 4 anyway).
+    const bool user_quads = shiftOf(plan.input_offset) % 4 == 0 && shiftOf(plan.output_offset) % 4 == 0;
+    const bool inclusive = plan.kind == ScanKind::Inclusive;
+    const ScanBinding partials =
+        plan.scratch_bytes ? ScanBinding{ScanBuffer::Scratch, 0, plan.scratch_bytes} : ScanBinding{};
+    struct Data {
+        ScanBuffer buffer;
+        uint64_t offset;  // byte offset of element 0
+    };
+    // The bound range of `count` elements of `data`: from the aligned offset at or before it.
+    auto bindingOf = [&](const Data& data, uint64_t count) {
+        const uint64_t shift = shiftOf(data.offset);
+        return ScanBinding{data.buffer, data.offset - shift * 4, (shift + count) * 4};
+    };
+    uint64_t index = 0;
+    for (uint64_t w = 0; w < plan.windows; ++w) {
+        const ScanLevels& levels = plan.windowLevels(w);
+        const uint64_t first = plan.windowFirst(w);
+        const Data in{ScanBuffer::Input, plan.input_offset + first * 4};
+        const Data out{ScanBuffer::Output, plan.output_offset + first * 4};
+        const size_t top = levels.size() - 1;
+        // uvec4 addressing needs whole uvec4s: shifts and count multiples of 4 (the scratch
+        // arrays start aligned, so only their counts matter).
+        auto quads = [&](size_t l) { return (l == 0 ? user_quads : true) && levels[l].count % 4 == 0; };
+        auto data = [&](size_t l) { return l == 0 ? in : Data{ScanBuffer::Scratch, levels[l - 1].partials_offset}; };
+        auto one = [&](ScanPass pass, size_t l, const Data& src, const Data* dst, uint64_t partials_index,
+                       uint32_t flags, uint32_t carry_in, uint32_t carry_out) {
+            const ScanLevel& level = levels[l];
+            ScanDispatch d;
+            d.pass = pass;
+            d.vec4 = quads(l);
+            d.grid = level.grid;
+            d.window = static_cast<uint32_t>(w);
+            d.level = static_cast<uint32_t>(l);
+            d.input = bindingOf(src, level.count);
+            if (dst) d.output = bindingOf(*dst, level.count);
+            d.partials = partials;
+            d.constants = ScanBinding{ScanBuffer::Constants, index * plan.constants_stride,
+                                      sizeof(shared::PenumbraScanConstants)};
+            shared::PenumbraScanConstants c{};
+            c.count = static_cast<uint32_t>(level.count);
+            c.input_shift = shiftOf(src.offset);
+            c.output_shift = dst ? shiftOf(dst->offset) : 0u;
+            c.partials_index = static_cast<uint32_t>(partials_index);
+            c.carry_in_index = carry_in;
+            c.carry_out_index = carry_out;
+            c.flags = flags;
+            c.reserved = 0;
+            emit(static_cast<const ScanDispatch&>(d), static_cast<const shared::PenumbraScanConstants&>(c));
+            ++index;
+        };
+        // Up: every level below the top leaves one sum per tile for the level above.
+        for (size_t l = 0; l < top; ++l) {
+            one(ScanPass::Reduce, l, data(l), nullptr, levels[l].partials_offset / 4, 0, 0, 0);
+        }
+        // Top: one group, exclusive in place (or, with one level, straight to the output with
+        // the caller's kind), taking the previous window's carry (word w % 2) and leaving the
+        // next one's (word (w + 1) % 2): never the word it reads.
+        uint32_t flags = 0;
+        if (top == 0 && inclusive) flags |= PENUMBRA_SCAN_FLAG_INCLUSIVE;
+        if (w > 0) flags |= PENUMBRA_SCAN_FLAG_READ_OFFSETS;
+        if (w + 1 < plan.windows) flags |= PENUMBRA_SCAN_FLAG_WRITE_CARRY;
+        const Data top_out = top == 0 ? out : data(top);
+        one(ScanPass::Top, top, data(top), &top_out, 0, flags, static_cast<uint32_t>(w % 2),
+            static_cast<uint32_t>((w + 1) % 2));
+        // Down: each level adds its tiles' scanned offsets.
+        for (size_t l = top; l-- > 0;) {
+            const uint32_t down_flags = (l == 0 && inclusive) ? PENUMBRA_SCAN_FLAG_INCLUSIVE : 0;
+            const Data dst = l == 0 ? out : data(l);
+            one(ScanPass::Scan, l, data(l), &dst, levels[l].partials_offset / 4, down_flags, 0, 0);
+        }
+    }
+}
+
+/// Upper bounds over every n <= max_n (what Scanner::reserve sizes): scratch bytes (at least
+/// the carry words) and dispatches. Scratch: the first window's levels of min(max_n, window)
+/// elements plus the carry area (levels and arrays grow with the count); dispatches: every main
+/// window at most 2 * levels - 1, plus one for a tail window.
+struct ScanBounds {
+    uint64_t scratch_bytes = 0;
+    uint64_t dispatches = 0;
+};
+inline ScanBounds scanBounds(uint64_t max_n, const ScanOptions& resolved, const ScanLimits& limits) {
+    ScanPlan shape;
+    planScanShape(max_n, ScanKind::Exclusive, 0, 0, resolved, limits, shape);
+    ScanBounds b;
+    if (max_n == 0) return b;
+    ScanLevels levels;
+    b.scratch_bytes = planScanLevels(std::min(max_n, shape.window_elements), shape.items_per_thread,
+                                     shape.group_size, shape.alignment, limits, shape.alignment, levels);
+    b.dispatches = divUp(max_n, shape.window_elements) * (2 * levels.size() - 1) + 1;
+    return b;
+}
+
+}  // namespace detail
+
+/// Pure setup: what a scan of n elements of `kind`, reading the input at byte `input_offset` of
+/// its buffer and writing the output at `output_offset` of its own, does under `options` and
+/// `limits` (no GL): windows, levels, scratch, and the dispatch list with each dispatch's
+/// constants. Throws penumbra::Error for n > kScanMaxElements, offsets that are not multiples of
+/// 4, bad options, or limits too small for one group.
+inline ScanPlan planScan(uint64_t n, const ScanOptions& options = {}, const ScanLimits& limits = {},
+                         ScanKind kind = ScanKind::Exclusive, uint64_t input_offset = 0, uint64_t output_offset = 0) {
+    PENUMBRA_CHECK(n <= kScanMaxElements, "penumbra: scan of n = ", n, " elements exceeds kScanMaxElements = ",
+                   kScanMaxElements);
+    PENUMBRA_CHECK(input_offset % 4 == 0 && output_offset % 4 == 0, "penumbra: scan offsets ", input_offset, " and ",
+                   output_offset, " bytes must be multiples of 4");
+    const ScanOptions resolved = detail::validateScanSetup(options, limits);
+    ScanPlan plan;
+    detail::planScanShape(n, kind, input_offset, output_offset, resolved, limits, plan);
+    for (const ScanLevels* levels : {&plan.levels, &plan.last_levels, &plan.tail_levels}) {
+        for (const ScanLevel& level : *levels) {
+            // The checked fold: throws when even a 2D grid cannot hold the groups.
+            detail::foldDispatch(level.grid.groups, limits.max_groups_x, limits.max_groups_y);
+        }
+    }
     PENUMBRA_CHECK(plan.scratch_bytes <= limits.max_binding_bytes, "penumbra: scan scratch of ", plan.scratch_bytes,
                    " bytes exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE ", limits.max_binding_bytes);
-    for (uint64_t w = 0; w < plan.windows; ++w) plan.dispatches += 2 * plan.windowLevels(w).size() - 1;
+    plan.dispatch_list.reserve(static_cast<size_t>(plan.dispatches));
+    plan.constants.reserve(static_cast<size_t>(plan.dispatches));
+    detail::forEachScanDispatch(plan, [&](const ScanDispatch& d, const shared::PenumbraScanConstants& c) {
+        plan.dispatch_list.push_back(d);
+        plan.constants.push_back(c);
+    });
     return plan;
 }
 
@@ -315,361 +557,5 @@ inline void scanCpu(const uint32_t* input, uint32_t* output, size_t n, ScanKind 
 }
 
 }  // namespace penumbra
-
-// ---- GL execution (Scanner) -------------------------------------------------------------------
-#ifndef PENUMBRA_SCAN_NO_GL
-
-#include "penumbra/gl/gl.hpp"
-#include "penumbra/gl/shader.hpp"
-
-#include <cstring>
-
-// GL_KHR_shader_subgroup enums, for loaders generated without the extension.
-#ifndef GL_SUBGROUP_SIZE_KHR
-#define GL_SUBGROUP_SIZE_KHR 0x9532
-#endif
-#ifndef GL_SUBGROUP_SUPPORTED_STAGES_KHR
-#define GL_SUBGROUP_SUPPORTED_STAGES_KHR 0x9533
-#endif
-#ifndef GL_SUBGROUP_SUPPORTED_FEATURES_KHR
-#define GL_SUBGROUP_SUPPORTED_FEATURES_KHR 0x9534
-#endif
-#ifndef GL_SUBGROUP_FEATURE_BASIC_BIT_KHR
-#define GL_SUBGROUP_FEATURE_BASIC_BIT_KHR 0x00000001
-#endif
-#ifndef GL_SUBGROUP_FEATURE_ARITHMETIC_BIT_KHR
-#define GL_SUBGROUP_FEATURE_ARITHMETIC_BIT_KHR 0x00000004
-#endif
-
-namespace penumbra {
-
-namespace detail {
-
-inline bool glHasExtension(const char* name) {
-    const GLint count = gl::getInteger(GL_NUM_EXTENSIONS);
-    for (GLint i = 0; i < count; ++i) {
-        const char* ext = reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, static_cast<GLuint>(i)));
-        if (ext && std::strcmp(ext, name) == 0) return true;
-    }
-    return false;
-}
-
-/// Subgroup size when compute shaders have GL_KHR_shader_subgroup basic + arithmetic, else 0.
-inline uint32_t computeSubgroupSize() {
-    if (!glHasExtension("GL_KHR_shader_subgroup")) return 0;
-    const GLint stages = gl::getInteger(GL_SUBGROUP_SUPPORTED_STAGES_KHR);
-    const GLint features = gl::getInteger(GL_SUBGROUP_SUPPORTED_FEATURES_KHR);
-    const GLint size = gl::getInteger(GL_SUBGROUP_SIZE_KHR);
-    const GLint needed = GL_SUBGROUP_FEATURE_BASIC_BIT_KHR | GL_SUBGROUP_FEATURE_ARITHMETIC_BIT_KHR;
-    if (!(stages & GL_COMPUTE_SHADER_BIT) || (features & needed) != needed || size <= 0) return 0;
-    return static_cast<uint32_t>(size);
-}
-
-}  // namespace detail
-
-/// The current context's limits for planScan (needs a current GL context).
-inline ScanLimits queryScanLimits() {
-    ScanLimits limits;
-    GLint64 block = 0;
-    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
-    limits.max_binding_bytes = static_cast<uint64_t>(block);
-    limits.binding_alignment = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
-    limits.max_groups_x = static_cast<uint64_t>(gl::getInteger(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0));
-    limits.max_groups_y = static_cast<uint64_t>(gl::getInteger(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 1));
-    limits.max_group_size = static_cast<uint32_t>(std::min(gl::getInteger(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS),
-                                                           gl::getInteger(GL_MAX_COMPUTE_WORK_GROUP_SIZE, 0)));
-    PENUMBRA_CHECK(limits.max_binding_bytes > 0 && limits.binding_alignment > 0 && limits.max_groups_x > 0 &&
-                       limits.max_groups_y > 0,
-                   "penumbra: the driver reported unusable compute limits (is a GL 4.5 context current?)");
-    return limits;
-}
-
-/// Scans uint buffer ranges on the GPU (see the summary at the top of this file). Owns its
-/// programs and a scratch buffer: RAII, movable, not copyable; create, use and destroy it with
-/// the same GL context current. A moved-from Scanner may only be destroyed or assigned to.
-class Scanner {
-public:
-    /// Needs a current GL 4.5 context; queries the limits and compiles six programs (reduce, scan
-    /// and top passes; uvec4 and scalar addressing). Throws penumbra::Error for bad options or
-    /// shader errors.
-    explicit Scanner(const ScanOptions& options = {}, const ShaderLibrary& library = ShaderLibrary::embedded())
-        : limits_(queryScanLimits()) {
-        options_ = detail::resolveScanOptions(options, limits_);
-        planScan(0, options_, limits_);  // validates window_elements against the limits
-        for (int vec4 = 0; vec4 < 2; ++vec4) {
-            buildKernel(kReduce, vec4, "penumbra/scan/scan.comp.glsl", library);
-            buildKernel(kScan, vec4, "penumbra/scan/scan.comp.glsl", library);
-        }
-        // Top-pass workgroup scan: KHR subgroup arithmetic where the driver has it, else ARB
-        // ballot, else shared memory. A subgroup mode is kept only if a small scan matches the CPU
-        // twin: it assumes subgroups of consecutive invocations, which GL does not promise (and
-        // ballot's subgroup size cannot even be queried).
-        if (options_.allow_subgroups) {
-            const uint32_t khr = detail::computeSubgroupSize();
-            if (khr != 0 && options_.group_size % khr == 0) {
-                subgroups_ = ScanSubgroups::Khr;
-            } else if (detail::glHasExtension("GL_ARB_shader_ballot")) {
-                subgroups_ = ScanSubgroups::Ballot;
-            }
-        }
-        buildTopKernels(library);
-        if (subgroups_ != ScanSubgroups::None && !selfCheck()) {
-            subgroups_ = ScanSubgroups::None;
-            buildTopKernels(library);
-        }
-        gl::checkErrors("penumbra::Scanner construction");
-    }
-
-    // TEMPORARY shim until the engine-grade scanner lands (h/scan).
-    Scanner(const ScanOptions& options, const ShaderLibrary& library, const ScanBindings&) : Scanner(options, library) {}
-    Status exclusive(const BufferRange& in, const BufferRange& out, uint64_t n) {
-        exclusive(in.buffer, in.offset, out.buffer, out.offset, n);
-        return Status::Ok;
-    }
-    Scanner(Scanner&& other) noexcept { *this = std::move(other); }
-    Scanner& operator=(Scanner&& other) noexcept {
-        if (this != &other) {
-            releaseScratch();
-            options_ = other.options_;
-            limits_ = other.limits_;
-            subgroups_ = other.subgroups_;
-            for (int p = 0; p < kPasses; ++p) {
-                for (int v = 0; v < 2; ++v) kernels_[p][v] = std::move(other.kernels_[p][v]);
-            }
-            scratch_ = std::exchange(other.scratch_, 0);
-            scratch_capacity_ = std::exchange(other.scratch_capacity_, 0);
-        }
-        return *this;
-    }
-    Scanner(const Scanner&) = delete;
-    Scanner& operator=(const Scanner&) = delete;
-    ~Scanner() { releaseScratch(); }
-
-    /// Scratch bytes a scan of n elements needs (0 when one group covers n). Pure arithmetic.
-    size_t scratchBytes(uint64_t n) const { return static_cast<size_t>(plan(n).scratch_bytes); }
-    /// The plan scan(n) executes (windows, levels, grids, scratch). Pure arithmetic.
-    ScanPlan plan(uint64_t n) const { return planScan(n, options_, limits_); }
-    /// Grows the scratch buffer to scratchBytes(n) now (scan() would do it on demand).
-    void reserve(uint64_t n) { reserveBytes(scratchBytes(n)); }
-
-    /// Scans n uints starting at input_offset_bytes of `input` into `output` at
-    /// output_offset_bytes (same buffer and offset = in place). See the GL state contract above.
-    void scan(ScanKind kind, GLuint input, size_t input_offset_bytes, GLuint output, size_t output_offset_bytes,
-              uint64_t n) {
-        if (n == 0) return;
-        const ScanPlan p = plan(n);  // checks n
-        checkRange("input", input, input_offset_bytes, n);
-        checkRange("output", output, output_offset_bytes, n);
-        if (input == output && input_offset_bytes != output_offset_bytes) {
-            const uint64_t bytes = n * 4;
-            const uint64_t a = input_offset_bytes, b = output_offset_bytes;
-            PENUMBRA_CHECK(a + bytes <= b || b + bytes <= a, "penumbra: scan of n = ", n, " elements in buffer ",
-                           input, ": input offset ", a, " and output offset ", b,
-                           " overlap without being equal (in place needs equal offsets)");
-        }
-        reserveBytes(p.scratch_bytes);
-        // Both shifts are the same for every window (main windows start whole groups' worth of
-        // elements apart, multiples of 16 bytes; the tail window has a count below 4 anyway).
-        const bool user_quads = shiftOf(input_offset_bytes) % 4 == 0 && shiftOf(output_offset_bytes) % 4 == 0;
-        for (uint64_t w = 0; w < p.windows; ++w) {
-            const std::vector<ScanLevel>& levels = p.windowLevels(w);
-            const uint64_t first = p.windowFirst(w);
-            const Range in{input, input_offset_bytes + first * 4};
-            const Range out{output, output_offset_bytes + first * 4};
-            const size_t top = levels.size() - 1;
-            // uvec4 addressing needs whole uvec4s: shifts and count multiples of 4 (the scratch
-            // arrays start aligned, so only their counts matter).
-            auto quads = [&](size_t l) { return (l == 0 ? user_quads : true) && levels[l].count % 4 == 0; };
-            auto data = [&](size_t l) { return l == 0 ? in : Range{scratch_, levels[l - 1].partials_offset}; };
-            // Up: every level below the top leaves one sum per tile for the level above.
-            for (size_t l = 0; l < top; ++l) {
-                dispatch(kReduce, quads(l), levels[l], data(l), data(l), levels[l].partials_offset / 4, 0);
-            }
-            // Top: one group, exclusive in place (or, with one level, straight to the output with
-            // the caller's kind), taking the previous window's carry and leaving the next one's.
-            uint32_t flags = 0;
-            if (top == 0 && kind == ScanKind::Inclusive) flags |= PENUMBRA_SCAN_FLAG_INCLUSIVE;
-            if (w > 0) flags |= PENUMBRA_SCAN_FLAG_READ_OFFSETS;
-            if (w + 1 < p.windows) flags |= PENUMBRA_SCAN_FLAG_WRITE_CARRY;
-            dispatch(kTop, quads(top), levels[top], data(top), top == 0 ? out : data(top), 0, flags);
-            // Down: each level adds its tiles' scanned offsets.
-            for (size_t l = top; l-- > 0;) {
-                const uint32_t down_flags = (l == 0 && kind == ScanKind::Inclusive) ? PENUMBRA_SCAN_FLAG_INCLUSIVE : 0;
-                dispatch(kScan, quads(l), levels[l], data(l), l == 0 ? out : data(l), levels[l].partials_offset / 4,
-                         down_flags);
-            }
-        }
-        for (GLuint b = 0; b < PENUMBRA_SCAN_BINDING_COUNT; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        glUseProgram(0);
-    }
-    void exclusive(GLuint input, size_t input_offset_bytes, GLuint output, size_t output_offset_bytes, uint64_t n) {
-        scan(ScanKind::Exclusive, input, input_offset_bytes, output, output_offset_bytes, n);
-    }
-    void inclusive(GLuint input, size_t input_offset_bytes, GLuint output, size_t output_offset_bytes, uint64_t n) {
-        scan(ScanKind::Inclusive, input, input_offset_bytes, output, output_offset_bytes, n);
-    }
-
-    /// True when the top pass's workgroup scan uses subgroup operations (see subgroupMode()).
-    bool usesSubgroups() const { return subgroups_ != ScanSubgroups::None; }
-    /// Khr: GL_KHR_shader_subgroup arithmetic in compute shaders and a group size that is a
-    /// multiple of GL_SUBGROUP_SIZE_KHR; else Ballot: GL_ARB_shader_ballot; either kept only if a
-    /// small scan at construction matched the CPU twin; else None (shared memory only). Always
-    /// None with ScanOptions::allow_subgroups = false. The bulk passes use no cross-invocation
-    /// operations in any mode.
-    ScanSubgroups subgroupMode() const { return subgroups_; }
-    const ScanOptions& options() const { return options_; }  ///< resolved (no zeros)
-    const ScanLimits& limits() const { return limits_; }
-    GLuint scratchBuffer() const { return scratch_; }
-    size_t scratchCapacity() const { return scratch_capacity_; }
-
-private:
-    struct Kernel {
-        gl::Program program;
-        GLint count = -1, input_shift = -1, output_shift = -1, partials_index = -1, carry_index = -1, flags = -1;
-    };
-    struct Range {
-        GLuint buffer;
-        uint64_t offset;  ///< byte offset of element 0
-    };
-    static constexpr int kReduce = 0, kScan = 1, kTop = 2, kPasses = 3;
-
-    ScanOptions options_;
-    ScanLimits limits_;
-    ScanSubgroups subgroups_ = ScanSubgroups::None;
-    Kernel kernels_[kPasses][2];  ///< [pass][addressing: scalar, uvec4]
-    GLuint scratch_ = 0;
-    size_t scratch_capacity_ = 0;
-
-    uint32_t shiftOf(uint64_t offset_bytes) const {
-        return static_cast<uint32_t>(offset_bytes % detail::scanAlignment(limits_) / 4);
-    }
-
-    void buildKernel(int pass, int vec4, const char* key, const ShaderLibrary& library) {
-        static const char* const kPassNames[kPasses] = {"PENUMBRA_SCAN_PASS_REDUCE", "PENUMBRA_SCAN_PASS_SCAN",
-                                                        "PENUMBRA_SCAN_PASS_TOP"};
-        const ShaderDefines defines = {{"PENUMBRA_SCAN_PASS", kPassNames[pass]},
-                                       {"PENUMBRA_SCAN_GROUP_SIZE", std::to_string(options_.group_size)},
-                                       {"PENUMBRA_SCAN_ITEMS_PER_THREAD", std::to_string(options_.items_per_thread)},
-                                       {"PENUMBRA_SCAN_VEC4", vec4 ? "1" : "0"}};
-        Kernel& k = kernels_[pass][vec4];
-        k.program = gl::buildComputeProgram(key, defines, library);
-        k.count = k.program.uniform("penumbraScanCount");
-        k.input_shift = k.program.uniform("penumbraScanInputShift");
-        k.output_shift = k.program.uniform("penumbraScanOutputShift");
-        k.partials_index = k.program.uniform("penumbraScanPartialsIndex");
-        k.carry_index = k.program.uniform("penumbraScanCarryIndex");
-        k.flags = k.program.uniform("penumbraScanFlags");
-    }
-
-    void buildTopKernels(const ShaderLibrary& library) {
-        const char* key = subgroups_ == ScanSubgroups::Khr      ? "penumbra/scan/scan_subgroups.comp.glsl"
-                          : subgroups_ == ScanSubgroups::Ballot ? "penumbra/scan/scan_ballot.comp.glsl"
-                                                                : "penumbra/scan/scan.comp.glsl";
-        for (int vec4 = 0; vec4 < 2; ++vec4) buildKernel(kTop, vec4, key, library);
-    }
-
-    // Scans one group's worth + 2 * items + 7 elements of a fixed pattern (reduce, top, scan, the
-    // tail window's carry) into an aligned and a misaligned range (uvec4 and scalar kernels) and
-    // compares with scanCpu.
-    bool selfCheck() {
-        const uint64_t n = (uint64_t(options_.group_size) + 2) * options_.items_per_thread + 7;
-        std::vector<uint32_t> values(n), want(n), got(n);
-        for (uint64_t i = 0; i < n; ++i) values[i] = static_cast<uint32_t>(i * 2654435761u + 12345u);
-        scanCpu(values.data(), want.data(), n, ScanKind::Exclusive);
-        GLuint buffers[2] = {0, 0};
-        glCreateBuffers(2, buffers);
-        glNamedBufferStorage(buffers[0], static_cast<GLsizeiptr>(n * 4), values.data(), 0);
-        glNamedBufferStorage(buffers[1], static_cast<GLsizeiptr>(n * 4 + 4), nullptr, 0);
-        bool ok = true;
-        for (size_t offset : {size_t(0), size_t(4)}) {
-            scan(ScanKind::Exclusive, buffers[0], 0, buffers[1], offset, n);
-            glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-            glGetNamedBufferSubData(buffers[1], static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(n * 4),
-                                    got.data());
-            ok = ok && got == want;
-        }
-        glDeleteBuffers(2, buffers);
-        return ok;
-    }
-
-    static void checkRange(const char* what, GLuint buffer, size_t offset, uint64_t n) {
-        PENUMBRA_CHECK(buffer != 0 && glIsBuffer(buffer), "penumbra: scan ", what, " buffer ", buffer,
-                       " is not a buffer object");
-        GLint64 size = 0;
-        glGetNamedBufferParameteri64v(buffer, GL_BUFFER_SIZE, &size);
-        PENUMBRA_CHECK(size > 0, "penumbra: scan ", what, " buffer ", buffer,
-                       " has no storage (GL_BUFFER_SIZE 0; allocate it with glNamedBufferStorage/Data)");
-        PENUMBRA_CHECK(offset % 4 == 0, "penumbra: scan ", what, " offset ", offset,
-                       " bytes is not a multiple of 4");
-        const uint64_t bytes = n * 4, total = static_cast<uint64_t>(size);
-        PENUMBRA_CHECK(offset <= total && bytes <= total - offset, "penumbra: scan ", what, " range of n = ", n,
-                       " elements at offset ", offset, " (", bytes, " bytes) exceeds buffer ", buffer,
-                       "'s GL_BUFFER_SIZE ", total);
-    }
-
-    void reserveBytes(uint64_t bytes) {
-        if (bytes <= scratch_capacity_) return;
-        releaseScratch();
-        glCreateBuffers(1, &scratch_);
-        while (glGetError() != GL_NO_ERROR) {
-        }
-        glNamedBufferStorage(scratch_, static_cast<GLsizeiptr>(bytes), nullptr, 0);
-        const GLenum error = glGetError();
-        if (error != GL_NO_ERROR) {
-            releaseScratch();
-            ::penumbra::detail::fail("penumbra: allocating ", bytes, " bytes of scan scratch failed with ",
-                                     gl::errorName(error));
-        }
-        scratch_capacity_ = static_cast<size_t>(bytes);
-    }
-    void releaseScratch() {
-        if (scratch_) glDeleteBuffers(1, &scratch_);
-        scratch_ = 0;
-        scratch_capacity_ = 0;
-    }
-
-    // Binds `count` elements of `data` from an aligned offset at or before it (uint view at
-    // `index`, uvec4 view at `index_vec4` too when `vec4`) and sets the element shift uniform.
-    void bindData(GLuint index, GLuint index_vec4, const Range& data, uint64_t count, bool vec4, GLint shift_location,
-                  GLuint program) const {
-        const uint64_t shift = shiftOf(data.offset);
-        const uint64_t base = data.offset - shift * 4;
-        const GLsizeiptr bytes = static_cast<GLsizeiptr>((shift + count) * 4);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, index, data.buffer, static_cast<GLintptr>(base), bytes);
-        if (vec4) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, index_vec4, data.buffer, static_cast<GLintptr>(base), bytes);
-        if (shift_location >= 0) glProgramUniform1ui(program, shift_location, static_cast<GLuint>(shift));
-    }
-
-    // One pass over `level`: binds the data ranges and the scratch, sets the uniforms, and
-    // dispatches after a GL_SHADER_STORAGE_BARRIER_BIT barrier — the first one makes the caller's
-    // shader writes to the input visible, later ones order the passes; none follows the last.
-    void dispatch(int pass, bool vec4, const ScanLevel& level, const Range& in, const Range& out,
-                  uint64_t partials_index, uint32_t flags) {
-        const Kernel& k = kernels_[pass][vec4 ? 1 : 0];
-        const GLuint program = k.program.id();
-        bindData(PENUMBRA_SCAN_BINDING_INPUT, PENUMBRA_SCAN_BINDING_INPUT_VEC4, in, level.count, vec4, k.input_shift,
-                 program);
-        if (pass != kReduce) {
-            bindData(PENUMBRA_SCAN_BINDING_OUTPUT, PENUMBRA_SCAN_BINDING_OUTPUT_VEC4, out, level.count, vec4,
-                     k.output_shift, program);
-        }
-        if (scratch_) {
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_PARTIALS, scratch_, 0,
-                              static_cast<GLsizeiptr>(scratch_capacity_));
-        }
-        if (k.count >= 0) glProgramUniform1ui(program, k.count, static_cast<GLuint>(level.count));
-        if (k.partials_index >= 0) glProgramUniform1ui(program, k.partials_index, static_cast<GLuint>(partials_index));
-        if (k.carry_index >= 0) glProgramUniform1ui(program, k.carry_index, 0u);
-        if (k.flags >= 0) glProgramUniform1ui(program, k.flags, flags);
-        glUseProgram(program);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glDispatchCompute(level.grid.x, level.grid.y, 1);
-    }
-};
-
-}  // namespace penumbra
-
-#endif  // PENUMBRA_SCAN_NO_GL
 
 #endif

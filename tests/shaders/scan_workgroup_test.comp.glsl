@@ -12,13 +12,16 @@
 // penumbra-permutation: PENUMBRA_SCAN_GROUP_SIZE=100
 // penumbra-permutation: PENUMBRA_SCAN_GROUP_SIZE=1024
 // penumbra-permutation: PENUMBRA_SCAN_GROUP_SIZE=64 PENUMBRA_SCAN_TEST_2D
-#include "penumbra/scan/workgroup.glsl"
-
-#ifdef PENUMBRA_SCAN_TEST_2D
+// PENUMBRA_SCAN_TEST_LOCAL_SIZE (tests only) declares a local size that may disagree with the
+// hook: the snippet must then fail to compile.
+#if defined(PENUMBRA_SCAN_TEST_LOCAL_SIZE)
+layout(local_size_x = PENUMBRA_SCAN_TEST_LOCAL_SIZE) in;
+#elif defined(PENUMBRA_SCAN_TEST_2D)
 layout(local_size_x = 8, local_size_y = PENUMBRA_SCAN_GROUP_SIZE / 8) in;
 #else
 layout(local_size_x = PENUMBRA_SCAN_GROUP_SIZE) in;
 #endif
+#include "penumbra/scan/workgroup.glsl"
 
 layout(std430, binding = 0) readonly buffer ScanTestValues { uint scanTestValues[]; };
 layout(std430, binding = 1) writeonly buffer ScanTestResults { uint scanTestResults[]; };

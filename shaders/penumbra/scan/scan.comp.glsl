@@ -10,10 +10,13 @@
 //   scan pass:   tile t's outputs = partials[partials_index + t] (its scanned offset) + the serial
 //                scan of the tile.
 //   top pass:    one work group scans up to GROUP_SIZE tiles: serial scans, one workgroup scan
-//                (workgroup.glsl), offset = partials[carry_index] when FLAG_READ_OFFSETS is set
-//                (else 0), and with FLAG_WRITE_CARRY partials[carry_index] = offset + sum afterwards
-//                — how the host carries the running total from one binding window to the next. The
-//                last invocation's inclusive sum is that value, so no workgroup total is needed.
+//                (workgroup.glsl), offset = partials[carry_in_index] when FLAG_READ_OFFSETS is set
+//                (else 0), and with FLAG_WRITE_CARRY partials[carry_out_index] = offset + sum
+//                afterwards — how the host carries the running total from one binding window to the
+//                next. The two indices always differ (window w reads word w % 2 and writes word
+//                (w + 1) % 2): barrier() orders shared memory only, so no invocation may read a
+//                buffer word another invocation of the same dispatch writes. The last invocation's
+//                inclusive sum is the carry, so no workgroup total is needed.
 // FLAG_INCLUSIVE selects inclusive output in the scan and top passes.
 //
 // Defines (all required, plain integers): PENUMBRA_SCAN_PASS (PENUMBRA_SCAN_PASS_REDUCE, _SCAN or
@@ -21,9 +24,12 @@
 // PENUMBRA_SCAN_VEC4 (1: both shifts and penumbraScanCount are multiples of 4 and all data goes
 // through the uvec4 views; 0: scalar addressing, any shift and count). Optional:
 // PENUMBRA_SCAN_SUBGROUPS (see workgroup.glsl; scan_subgroups.comp.glsl and scan_ballot.comp.glsl
-// set it; it only changes the top pass). Bindings: PENUMBRA_SCAN_BINDING_* in scan_shared.h.
-// Uniforms: below. Dispatch: reduce and scan a 2D-folded grid (penumbra::detail::foldDispatch) of
-// ceil(tiles / GROUP_SIZE) groups, tiles = ceil(penumbraScanCount / ITEMS_PER_THREAD); top 1 group.
+// set it; it only changes the top pass). Bindings: PENUMBRA_SCAN_BINDING_* in scan_shared.h (a
+// host may re-point the blocks with glShaderStorageBlockBinding / glUniformBlockBinding, as
+// penumbra::Scanner does for ScanBindings). Constants: the uniform block PenumbraScanConstantsBlock
+// holding one PenumbraScanConstants (scan_shared.h), one per dispatch — penumbra::planScan lists
+// them with the dispatches. Dispatch: reduce and scan a 2D-folded grid (penumbra::detail::foldDispatch)
+// of ceil(tiles / GROUP_SIZE) groups, tiles = ceil(count / ITEMS_PER_THREAD); top 1 group.
 //
 // penumbra-permutation: PENUMBRA_SCAN_PASS=PENUMBRA_SCAN_PASS_REDUCE PENUMBRA_SCAN_GROUP_SIZE=256 PENUMBRA_SCAN_ITEMS_PER_THREAD=16 PENUMBRA_SCAN_VEC4=1
 // penumbra-permutation: PENUMBRA_SCAN_PASS=PENUMBRA_SCAN_PASS_SCAN PENUMBRA_SCAN_GROUP_SIZE=256 PENUMBRA_SCAN_ITEMS_PER_THREAD=16 PENUMBRA_SCAN_VEC4=1
@@ -50,10 +56,14 @@
 #error PENUMBRA_SCAN_ITEMS_PER_THREAD must be a multiple of 4
 #endif
 
-// Checks PENUMBRA_SCAN_GROUP_SIZE before the layout line uses it.
-#include "penumbra/scan/workgroup.glsl"
+#ifndef PENUMBRA_SCAN_GROUP_SIZE
+#error penumbra/scan/scan.comp.glsl needs PENUMBRA_SCAN_GROUP_SIZE (invocations per work group)
+#endif
 
 layout(local_size_x = PENUMBRA_SCAN_GROUP_SIZE) in;
+
+// After the layout line: the snippet checks its hook against gl_WorkGroupSize.
+#include "penumbra/scan/workgroup.glsl"
 
 layout(std430, binding = PENUMBRA_SCAN_BINDING_INPUT) readonly buffer PenumbraScanInput {
     uint penumbraScanInput[];
@@ -73,12 +83,14 @@ layout(std430, binding = PENUMBRA_SCAN_BINDING_OUTPUT_VEC4) writeonly buffer Pen
 };
 #endif
 
-uniform uint penumbraScanCount;          // elements of this dispatch
-uniform uint penumbraScanInputShift;     // element i is penumbraScanInput[penumbraScanInputShift + i]
-uniform uint penumbraScanOutputShift;    // (the bound ranges start at aligned offsets before the data)
-uniform uint penumbraScanPartialsIndex;  // reduce: where tile sums go; scan: where tile offsets come from
-uniform uint penumbraScanCarryIndex;     // top: the carry word
-uniform uint penumbraScanFlags;          // PENUMBRA_SCAN_FLAG_* (scan and top passes)
+layout(std140, binding = PENUMBRA_SCAN_BINDING_CONSTANTS) uniform PenumbraScanConstantsBlock {
+    PenumbraScanConstants penumbraScanConstants;
+};
+#define penumbraScanCount (penumbraScanConstants.count)
+#define penumbraScanInputShift (penumbraScanConstants.input_shift)
+#define penumbraScanOutputShift (penumbraScanConstants.output_shift)
+#define penumbraScanPartialsIndex (penumbraScanConstants.partials_index)
+#define penumbraScanFlags (penumbraScanConstants.flags)
 
 const uint penumbraScanItems = uint(PENUMBRA_SCAN_ITEMS_PER_THREAD);
 const uint penumbraScanQuadsPerThread = penumbraScanItems / 4u;
@@ -166,15 +178,15 @@ void main() {
     uint tile = gl_LocalInvocationIndex;
     uvec4 items[penumbraScanQuadsPerThread];
     uint run = penumbraScanLoadTile(tile, items);
-    // Read before the workgroup scan's barriers: the offset and the carry are the same word,
-    // written below once every invocation has passed those barriers.
+    // carry_in_index != carry_out_index (the host alternates two words): no invocation reads the
+    // word the last invocation writes, whatever the order of buffer accesses across invocations.
     uint offset = (penumbraScanFlags & uint(PENUMBRA_SCAN_FLAG_READ_OFFSETS)) != 0u
-                      ? penumbraScanPartials[penumbraScanCarryIndex]
+                      ? penumbraScanPartials[penumbraScanConstants.carry_in_index]
                       : 0u;
     uint prefix = offset + penumbraScanWorkgroupExclusive(run);
     if ((penumbraScanFlags & uint(PENUMBRA_SCAN_FLAG_WRITE_CARRY)) != 0u &&
         gl_LocalInvocationIndex == penumbraScanGroupSize - 1u) {
-        penumbraScanPartials[penumbraScanCarryIndex] = prefix + run;
+        penumbraScanPartials[penumbraScanConstants.carry_out_index] = prefix + run;
     }
     penumbraScanStoreTile(tile, items, prefix);
 #else

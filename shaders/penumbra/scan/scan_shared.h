@@ -2,9 +2,15 @@
 // include/penumbra/detail/shared.hpp) and GLSL (scan.comp.glsl, workgroup.glsl). Valid as both.
 //
 // Every value here is a plain decimal so it also works in GLSL layout qualifiers and #if lines;
-// code that needs a uint writes uint(PENUMBRA_SCAN_...).
+// code that needs a uint writes uint(PENUMBRA_SCAN_...). PenumbraScanConstants (below) is the one
+// constants block of the kernels: std140-safe (eight uints, 32 bytes, no padding rules involved),
+// static_assert'ed by include/penumbra/scan.hpp, which includes penumbra/detail/shared.hpp first.
 #ifndef PENUMBRA_SCAN_SHARED_H
 #define PENUMBRA_SCAN_SHARED_H
+
+#ifdef __cplusplus
+namespace penumbra::shared {
+#endif
 
 // ScanOptions{} defaults: 16 uints (four uvec4 loads) per invocation — each level of the scan
 // shrinks the data 16-fold, so the levels above the first add ~7% of its traffic — and 256
@@ -34,18 +40,45 @@
 #define PENUMBRA_SCAN_PASS_SCAN 1
 #define PENUMBRA_SCAN_PASS_TOP 2
 
-// Shader storage bindings of scan.comp.glsl. Bindings 3 and 4 view the same ranges as 0 and 1 as
-// uvec4 and exist only when PENUMBRA_SCAN_VEC4 is 1.
+// Default bindings of scan.comp.glsl (penumbra::ScanBindings can move them: the Scanner re-points
+// its programs' blocks at construction). Shader storage: bindings 3 and 4 view the same ranges as 0
+// and 1 as uvec4 and exist only when PENUMBRA_SCAN_VEC4 is 1. Uniform buffer: the constants block
+// (the uniform-buffer binding space is separate from the shader-storage one).
 #define PENUMBRA_SCAN_BINDING_INPUT 0
 #define PENUMBRA_SCAN_BINDING_OUTPUT 1
 #define PENUMBRA_SCAN_BINDING_PARTIALS 2
 #define PENUMBRA_SCAN_BINDING_INPUT_VEC4 3
 #define PENUMBRA_SCAN_BINDING_OUTPUT_VEC4 4
-#define PENUMBRA_SCAN_BINDING_COUNT 5
+#define PENUMBRA_SCAN_BINDING_COUNT 5  // shader-storage bindings
+#define PENUMBRA_SCAN_BINDING_CONSTANTS 0  // uniform block PenumbraScanConstantsBlock
 
-// Bits of the penumbraScanFlags uniform (scan and top passes).
+// Bits of PenumbraScanConstants::flags (scan and top passes).
 #define PENUMBRA_SCAN_FLAG_INCLUSIVE 1
 #define PENUMBRA_SCAN_FLAG_READ_OFFSETS 2
 #define PENUMBRA_SCAN_FLAG_WRITE_CARRY 4
+
+// Carry words at the start of the scratch buffer: window w of a windowed scan reads word w % 2 and
+// writes word (w + 1) % 2, so the top pass never reads a word one of its own invocations writes
+// (barrier() orders shared memory only, not buffer memory).
+#define PENUMBRA_SCAN_CARRY_WORDS 2
+
+// The constants of one dispatch: uniform block PenumbraScanConstantsBlock (std140) of
+// scan.comp.glsl at PENUMBRA_SCAN_BINDING_CONSTANTS. penumbra::planScan computes one per dispatch;
+// penumbra::Scanner stores them all in one uniform buffer, each at a multiple of
+// GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, and binds that range per dispatch.
+struct PenumbraScanConstants {
+    uint count;            // elements this dispatch covers
+    uint input_shift;      // element i is input[input_shift + i] (the bound range starts aligned,
+    uint output_shift;     //   up to alignment - 4 bytes before the data); likewise the output
+    uint partials_index;   // reduce: first tile-sum word it writes; scan: first tile-offset word it reads
+    uint carry_in_index;   // top with FLAG_READ_OFFSETS: the word holding the earlier windows' total
+    uint carry_out_index;  // top with FLAG_WRITE_CARRY: the word that receives the running total
+    uint flags;            // PENUMBRA_SCAN_FLAG_* bits
+    uint reserved;         // 0 (pads the block to 32 bytes)
+};
+
+#ifdef __cplusplus
+}  // namespace penumbra::shared
+#endif
 
 #endif

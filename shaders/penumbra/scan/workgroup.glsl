@@ -5,9 +5,15 @@
 // functions, and a kernel that produces one count per invocation can call them directly.
 //
 // Integration
+//   include it after the kernel's layout(local_size_x = ...) in; line: the snippet checks its hook
+//   against gl_WorkGroupSize, which GLSL only knows from there on.
 //   hooks (define before including):
 //     PENUMBRA_SCAN_GROUP_SIZE  required: invocations per work group (the product of the
-//                               local_size_x/y/z the kernel declares), a plain integer >= 1.
+//                               local_size_x/y/z the kernel declares), a plain integer >= 1. A
+//                               value that differs from that product (or an include before the
+//                               layout line) fails to compile — the array
+//                               penumbraScanGroupSizeMustEqualLocalSize gets size -1 — instead of
+//                               returning wrong sums.
 //     PENUMBRA_SCAN_SUBGROUPS   optional, default PENUMBRA_SCAN_SUBGROUPS_NONE (0, shared memory
 //                               only). PENUMBRA_SCAN_SUBGROUPS_KHR (1): the entry shader enables
 //                               GL_KHR_shader_subgroup_arithmetic, the driver runs compute subgroups
@@ -47,6 +53,11 @@
 #endif
 
 const uint penumbraScanGroupSize = uint(PENUMBRA_SCAN_GROUP_SIZE);
+// Compile-time check of the hook (GLSL has no static_assert: a negative array size is the error).
+// If the compiler stops here, PENUMBRA_SCAN_GROUP_SIZE differs from local_size_x * local_size_y *
+// local_size_z, or this file was included before the layout(local_size_...) in; line.
+const uint penumbraScanGroupSizeMustEqualLocalSize[
+    gl_WorkGroupSize.x * gl_WorkGroupSize.y * gl_WorkGroupSize.z == penumbraScanGroupSize ? 1 : -1] = uint[1](0u);
 const uint penumbraScanRakingWidth = penumbraScanGroupSize > 256u ? uint(PENUMBRA_SCAN_RAKING_WIDTH_LARGE)
                                                                   : uint(PENUMBRA_SCAN_RAKING_WIDTH_SMALL);
 const uint penumbraScanSegmentCount = (penumbraScanGroupSize + penumbraScanRakingWidth - 1u) / penumbraScanRakingWidth;
