@@ -1,4 +1,6 @@
 // penumbra::scene OBJ loading — Wavefront OBJ files as penumbra scenes, via tinyobjloader.
+// Part of penumbra::support (support/include/; a core install has none of it, see CMakeLists.txt:
+// PENUMBRA_BUILD_SUPPORT). CMake target penumbra::support links tinyobjloader and stb.
 //
 // Integration: needs tinyobjloader's header <tiny_obj_loader.h> and its compiled library: link
 // tinyobjloader (CMake target tinyobjloader::tinyobjloader, or -ltinyobjloader). Do NOT define
@@ -181,7 +183,6 @@ inline bool parseObjNumber(std::string_view token, double& value, bool& out_of_r
     const size_t n = token.size();
     auto digit = [&](size_t k) { return k < n && token[k] >= '0' && token[k] <= '9'; };
     if (i < n && (token[i] == '+' || token[i] == '-')) ++i;
-    const size_t mantissa = i;
     size_t digits = 0;
     while (digit(i)) ++i, ++digits;
     if (i < n && token[i] == '.') {
@@ -197,7 +198,6 @@ inline bool parseObjNumber(std::string_view token, double& value, bool& out_of_r
     }
     if (i != n) return false;
     const char* first = token.data() + (token[0] == '+' ? 1 : 0);  // from_chars takes no '+'
-    (void)mantissa;
     const std::from_chars_result result = std::from_chars(first, token.data() + n, value);
     if (result.ec == std::errc::result_out_of_range) {
         out_of_range = true;
