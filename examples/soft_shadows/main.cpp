@@ -14,9 +14,10 @@
 //       (mismatched, ties, samples).
 //
 // Before any work: the arguments are parsed (CLI11) and checked (checkArgs: values, which flags
-// the mode uses, the output path: extension .png, folder writable). After loading the scene and
-// before allocating anything large: the light against the scene's bounds and an estimate of the
-// memory the run needs against the machine's (checkScene, checkMemory). Long phases print their
+// the mode uses, the output path: extension .png, folder writable) and the memory the image
+// sizes need against the machine's (checkMemory). After loading the scene and before allocating
+// anything large: the light against the scene's bounds (checkLight) and the memory estimate
+// again, with the scene's triangles. Long phases print their
 // progress on stderr (Progress). Exit codes: 0 done (and --help), 1 failed while running,
 // 2 bad arguments or a run that cannot work.
 //
@@ -74,6 +75,9 @@ struct Args {
     bool json = false;
     bool ground = true;
     bool reference = false;
+    // Next (issue 7 §2), not implemented yet: `--view-samples depth|exact` (a std::string here,
+    // CLI::IsMember in addOptions, a kModeFlags row if only hard mode uses it) and `--origin X,Y,Z`
+    // (text in RawArgs, parseVec3 in checkArgs, applied to scene, camera and light after loadScene).
 };
 
 /// The flags' text as given, before checkArgs turns them into Args values.
@@ -393,6 +397,11 @@ Json reportHead(const Args& args, const char* mode) {
     return j;
 }
 
+/// One line on stdout; a path that is not UTF-8 gets U+FFFD instead of failing the report.
+void printReport(const Json& j) {
+    std::printf("%s\n", j.dump(-1, ' ', false, Json::error_handler_t::replace).c_str());
+}
+
 Json vec3Json(const glm::dvec3& v) { return Json::array({v.x, v.y, v.z}); }
 
 /// The scene merged into one triangle list, with a per-triangle material (0 = ground).
@@ -534,7 +543,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         j["timings_ms"] = {{"load", load_ms},        {"gbuffer", gbuffer_ms},        {"shadows", shadows_ms},
                            {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", total_ms}};
         j["out"] = args.out;
-        std::printf("%s\n", j.dump().c_str());
+        printReport(j);
     } else {
         std::printf("%s (hard, %s): %zu triangles, %zu samples tested, %zu shadowed, %.1f ms shadows -> %s\n",
                     args.scene.c_str(), context.renderer().c_str(), oracle.triangleCount(),
@@ -643,7 +652,7 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
                            {"shade_and_write", shade_ms},
                            {"total", total_ms}};
         j["out"] = args.out;
-        std::printf("%s\n", j.dump().c_str());
+        printReport(j);
     } else {
         std::printf("%s: %zu triangles, %zu view samples x %zu light samples, %.1f ms -> %s\n", args.scene.c_str(),
                     oracle.triangleCount(), receivers.size(), light_samples.size(), total_ms, args.out.c_str());
@@ -693,6 +702,7 @@ int main(int argc, char** argv) {
     const auto t_start = std::chrono::steady_clock::now();
     try {
         checkArgs(app, args, raw);
+        checkMemory(args, 0);  // sizes that cannot run whatever the scene: before loading it
 
         // ---- scene ----
         auto t0 = std::chrono::steady_clock::now();
