@@ -639,11 +639,13 @@ TEST_CASE("obj: failures name the path and the reason") {
     const std::string degenerate = dir.write("degenerate.obj", "v 0 0 0\nv 1 0 0\nf 1 1 2\nf 1 2\n");
     CHECK(contains(errorMessage([&] { loadObj(degenerate); }), "no triangles"));
 
-    // tinyobjloader reads "nan" as 0, but 1e39 overflows float to infinity.
+    // 1e39 is a fine double but overflows float: the validating pass names line and text.
     const std::string infinite = dir.write("infinite.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n");
     message = errorMessage([&] { loadObj(infinite); });
     CHECK(contains(message, infinite));
     CHECK(contains(message, "vertex 2 has a NaN or infinite coordinate"));
+    CHECK(contains(message, "line 2"));
+    CHECK(contains(message, "'1e39'"));
 
     const std::string out_of_range = dir.write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
     message = errorMessage([&] { loadObj(out_of_range); });
@@ -654,6 +656,65 @@ TEST_CASE("obj: failures name the path and the reason") {
     CHECK(contains(errorMessage([&] { loadObj(coincident); }), "coincide"));
 
     CHECK(contains(errorMessage([&] { loadObj(dir.path.string()); }), dir.path.string()));
+}
+
+TEST_CASE("obj: the validating pass names the line and the value") {
+    // Each case: OBJ text, then the parts its message must contain. Without the pass,
+    // tinyobjloader reads nan/inf/garbage as 0 and a missing coordinate as 0.
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+        {"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "vertex 2 has a NaN or infinite coordinate", "'nan'"}},
+        {"v 0 0 0\nv 1 0 0\nv 0 -NaN 0\nf 1 2 3\n", {"line 3", "vertex 3", "NaN or infinite", "'-NaN'"}},
+        {"v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "vertex 2", "NaN or infinite", "'inf'"}},
+        {"v 0 0 0\nv 1 0 0\nv 0 1 -Infinity\nf 1 2 3\n", {"line 3", "'-Infinity'"}},
+        {"v 0 0 0\nv 1 0 1e400\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1e400'", "beyond float range"}},
+        {"# c\nv 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", {"line 3", "vertex 2", "needs 3 coordinates, found 2"}},
+        {"v\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", {"line 1", "found 0"}},
+        {"v 0 0 0\nv 1 0 0\nv 0 1.2.3 0\nf 1 2 3\n", {"line 3", "'1.2.3' is not a number"}},
+        {"v 0 0 0\nv 1 0 0\nv 0 0x10 0\nf 1 2 3\n", {"line 3", "'0x10' is not a number"}},
+        {"v 0 0 0\nv 1 0 0\nv 0 1 0 extra\nf 1 2 3\n", {"line 3", "'extra' is not a number"}},
+        {tri + "vn 0 1\nf 1 2 3\n", {"line 4", "normal 1", "needs 3 coordinates"}},
+        {tri + "vn 0 nan 0\nf 1 2 3\n", {"line 4", "normal 1", "'nan'"}},
+        {tri + "vt 0.5 e\nf 1 2 3\n", {"line 4", "texture coordinate 1", "'e' is not a number"}},
+        {tri + "f 1 2 0\n", {"line 4", "vertex index 0", "start at 1"}},
+        {tri + "f 1 2 9\n", {"line 4", "vertex 9", "the file has 3 vertices"}},
+        {tri + "f 1 2 -4\n", {"line 4", "relative vertex index -4", "3 defined so far"}},
+        {tri + "f 1 2 2147483648\n", {"line 4", "'2147483648' overflows int"}},
+        {tri + "f 1 2 -99999999999999999999999\n", {"line 4", "overflows int"}},
+        {tri + "f 1 2 3x\n", {"line 4", "'3x' is not a vertex index"}},
+        {tri + "f 1 2 /3\n", {"line 4", "'/3'", "not a vertex index"}},
+        {tri + "vn 0 1 0\nf 1//1 2//1 3//2\n", {"line 5", "normal 2", "the file has 1 normals"}},
+        {tri + "f 1/0 2 3\n", {"line 4", "texture coordinate index 0"}},
+        {tri + "f 1/1/1/1 2 3\n", {"line 4", "more than 3 indices"}},
+        {"v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\nv 1 1 nan\r\n", {"line 5", "'nan'"}},  // CRLF counts once
+    };
+    for (const auto& [text, parts] : cases) {
+        INFO(text);
+        const std::string message = errorMessage([&] { parseObj(text, "case.obj"); });
+        CHECK(contains(message, "parseObj('case.obj')"));
+        for (const std::string& part : parts) CHECK(contains(message, part));
+    }
+    // The same reaches loadObj's message with the path.
+    TempDir dir;
+    const std::string path = dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+    const std::string message = errorMessage([&] { loadObj(path); });
+    CHECK(contains(message, path));
+    CHECK(contains(message, "line 2"));
+    CHECK(contains(message, "'nan'"));
+
+    // What stays valid: signs, leading dots, exponents, relative indices, v//vn, colours,
+    // ignored statements (materials, smoothing, lines, tinyobjloader's tags) and unused vt.
+    const std::string good = "mtllib missing.mtl\no thing\ns 1\nv +0 -0. .0\nv 1e0 0 0 1 0.5 0.25\n"
+                             "v 0 1E+0 0\nvt 0.5\nvn 0 0 1\nusemtl none\nl 1 2\nt crease 2/1/0 1 2 0.5\n"
+                             "f -3//1 -2//1 -1//1\n";
+    const Scene scene = parseObj(good, "good.obj", ObjOptions{false, false});
+    REQUIRE(scene.meshes.size() == 1);
+    CHECK(scene.meshes[0].name == "good");
+    CHECK(scene.meshes[0].triangleCount() == 1);
+    CHECK(scene.meshes[0].bounds().max == glm::vec3(1, 1, 0));
+    // parseObj and loadObj agree.
+    CHECK(sameMesh(objectOf(parseObj(kQuadCubeObj, "quad_cube.obj")),
+                   objectOf(loadObj(dir.write("quad_cube.obj", kQuadCubeObj)))));
 }
 
 TEST_CASE("obj: shared real meshes (spot closed, teapot)") {

@@ -11,7 +11,9 @@ packages=(
   libegl-dev libegl1 libegl-mesa0 libgl-dev libgl1-mesa-dri   # EGL surfaceless + llvmpipe
   libosmesa6 libosmesa6-dev          # the second headless backend
   glslang-tools                      # glslangValidator for the shader tests
-  libtinyobjloader-dev libstb-dev    # OBJ scenes, PNG output
+  libtinyobjloader-dev libstb-dev    # penumbra::support: OBJ scenes, PNG output
+  libcli11-dev nlohmann-json3-dev    # soft_shadows: command line, JSON report
+  clang libclang-rt-14-dev           # the libFuzzer target on the OBJ loader (tests/fuzz)
   libepoxy-dev                       # a second GL loader, for the consumer test
 )
 

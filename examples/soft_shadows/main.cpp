@@ -3,7 +3,7 @@
 //
 //   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
-//                [--mode reference] [--out FILE.png] [--json] [--no-ground]
+//                [--mode reference|hard] [--reference] [--out FILE.png] [--json] [--no-ground]
 //
 // Modes
 //   reference (default): every view sample's visibility of N light samples from the exact
@@ -12,6 +12,18 @@
 //       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
 //       --reference adds the oracle's verdict for the same samples and light point to the JSON
 //       (mismatched, ties, samples).
+//
+// Before any work: the arguments are parsed (CLI11) and checked (checkArgs: values, which flags
+// the mode uses, the output path: extension .png, folder writable) and the memory the image
+// sizes need against the machine's (checkMemory). After loading the scene and before allocating
+// anything large: the light against the scene's bounds (checkLight) and the memory estimate
+// again, with the scene's triangles. Long phases print their
+// progress on stderr (Progress). Exit codes: 0 done (and --help), 1 failed while running,
+// 2 bad arguments or a run that cannot work.
+//
+// Adding a flag: a field in Args, one add_option line in addOptions(), its row in kModeFlags
+// (which modes use it) and its value checks in checkArgs(). Vector-valued flags parse with
+// parseVec3 (as --light-pos does).
 #include <penumbra/gl/headless.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/light_samples.hpp>
@@ -22,21 +34,34 @@
 #include <penumbra/scene/scene.hpp>
 #include <penumbra/version.hpp>
 
+#include <CLI/CLI.hpp>
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <cstdint>
+#include <filesystem>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::ordered_json;  // keys in insertion order, as the report always had them
+
+// =============================================================================================
+// Command line
 
 struct Args {
     std::string scene = "builtin:torus_knot";
@@ -50,107 +75,355 @@ struct Args {
     bool json = false;
     bool ground = true;
     bool reference = false;
+    // Next (issue 7 §2), not implemented yet: `--view-samples depth|exact` (a std::string here,
+    // CLI::IsMember in addOptions, a kModeFlags row if only hard mode uses it) and `--origin X,Y,Z`
+    // (text in RawArgs, parseVec3 in checkArgs, applied to scene, camera and light after loadScene).
 };
 
-[[noreturn]] void usage(const std::string& problem) {
-    std::fprintf(stderr,
-                 "soft_shadows: %s\n"
-                 "usage: soft_shadows [--scene builtin:NAME|PATH.obj] [--light-pos x,y,z] [--light-radius r]\n"
-                 "                    [--samples N] [--width W] [--height H] [--mode reference|hard]\n"
-                 "                    [--reference] [--out FILE.png] [--json] [--no-ground]\n"
-                 "built-in scenes: torus_knot columns hairball grass\n",
-                 problem.c_str());
-    std::exit(2);
+/// The flags' text as given, before checkArgs turns them into Args values.
+struct RawArgs {
+    std::string light_pos, light_radius, samples = "64", width = "512", height = "384";
+    bool no_ground = false;
+};
+
+/// A usage problem: reported as "soft_shadows: <what>" with exit code 2.
+struct UsageError {
+    std::string what;
+};
+
+template <typename... Parts>
+[[noreturn]] void usageError(const Parts&... parts) {
+    std::ostringstream out;
+    (out << ... << parts);
+    throw UsageError{out.str()};
 }
 
-double parseNumber(const std::string& text, const char* what) {
+/// Which modes use a flag; a flag given to a mode that would ignore it is an error.
+struct ModeFlag {
+    const char* flag;
+    bool reference;  // used by --mode reference
+    bool hard;       // used by --mode hard
+    const char* why_not;
+};
+// --reference in hard mode checks the GPU against the oracle at the light's centre only, so it
+// uses neither the light samples nor the radius.
+const ModeFlag kModeFlags[] = {
+    {"--samples", true, false, "hard shadows use one light point, the light's centre"},
+    {"--light-radius", true, false, "hard shadows use one light point, the light's centre"},
+    {"--reference", false, true, "reference mode is the oracle already"},
+};
+
+void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
+    app.add_option("--scene", a.scene, "builtin:NAME (torus_knot, columns, hairball, grass) or PATH.obj")
+        ->type_name("SCENE")
+        ->capture_default_str();
+    app.add_option("--light-pos", raw.light_pos, "light centre x,y,z (default: the scene's)")->type_name("X,Y,Z");
+    app.add_option("--light-radius", raw.light_radius, "spherical light radius > 0 (default: the scene's); reference mode")
+        ->type_name("R");
+    app.add_option("--samples", raw.samples, "light samples per view sample, 1..65536; reference mode")
+        ->type_name("N")
+        ->capture_default_str();
+    app.add_option("--width", raw.width, "image width, 1..16384")->type_name("W")->capture_default_str();
+    app.add_option("--height", raw.height, "image height, 1..16384")->type_name("H")->capture_default_str();
+    app.add_option("--mode", a.mode, "reference: oracle soft shadows on the CPU; hard: GPU alias-free hard shadows")
+        ->type_name("MODE")
+        ->check(CLI::IsMember({"reference", "hard"}))
+        ->capture_default_str();
+    app.add_flag("--reference", a.reference, "hard mode: compare with the oracle (JSON: reference.*)");
+    app.add_option("--out", a.out, "output image (.png); its folder must exist and be writable")
+        ->type_name("FILE.png")
+        ->capture_default_str();
+    app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
+    app.add_flag("--no-ground", raw.no_ground, "no ground plane");
+}
+
+/// A number, all of `text`, finite.
+double parseNumber(const std::string& text, const std::string& what) {
     char* end = nullptr;
-    double v = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(v)) usage(std::string("bad ") + what + " '" + text + "'");
+    errno = 0;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size()) usageError(what, ": '", text, "' is not a number");
+    if (!std::isfinite(v) || errno == ERANGE) usageError(what, " must be finite, got '", text, "'");
     return v;
 }
 
-uint32_t parseCount(const std::string& text, const char* what, uint32_t min, uint32_t max) {
-    double v = parseNumber(text, what);
-    if (v != std::floor(v) || v < min || v > max) {
-        usage(std::string(what) + " must be a whole number in [" + std::to_string(min) + ", " + std::to_string(max) +
-              "], got '" + text + "'");
-    }
+uint32_t parseCount(const std::string& text, const std::string& what, uint32_t min, uint32_t max) {
+    const double v = parseNumber(text, what);
+    if (v != std::floor(v) || v < min || v > max)
+        usageError(what, " must be a whole number in [", min, ", ", max, "], got '", text, "'");
     return static_cast<uint32_t>(v);
 }
 
-Args parseArgs(int argc, char** argv) {
-    Args a;
-    for (int i = 1; i < argc; ++i) {
-        const std::string arg = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) usage(arg + " needs a value");
-            return argv[++i];
-        };
-        if (arg == "--scene") a.scene = value();
-        else if (arg == "--mode") a.mode = value();
-        else if (arg == "--out") a.out = value();
-        else if (arg == "--json") a.json = true;
-        else if (arg == "--no-ground") a.ground = false;
-        else if (arg == "--reference") a.reference = true;
-        else if (arg == "--samples") a.samples = parseCount(value(), "--samples", 1, 1u << 16);
-        else if (arg == "--width") a.width = parseCount(value(), "--width", 1, 16384);
-        else if (arg == "--height") a.height = parseCount(value(), "--height", 1, 16384);
-        else if (arg == "--light-radius") {
-            a.light_radius = parseNumber(value(), "--light-radius");
-            if (a.light_radius < 0) usage("--light-radius must be >= 0");
-        } else if (arg == "--light-pos") {
-            std::string v = value();
-            std::replace(v.begin(), v.end(), ',', ' ');
-            std::istringstream in(v);
-            std::string x, y, z, extra;
-            in >> x >> y >> z;
-            if (z.empty() || (in >> extra)) usage("--light-pos takes x,y,z");
-            a.light_pos = {parseNumber(x, "--light-pos x"), parseNumber(y, "--light-pos y"),
-                           parseNumber(z, "--light-pos z")};
-            a.has_light_pos = true;
-        } else if (arg == "--help" || arg == "-h") {
-            usage("help");
-        } else {
-            usage("unknown argument '" + arg + "'");
+/// "x,y,z" (spaces allowed) -> three finite numbers; messages name the flag and the value.
+glm::dvec3 parseVec3(std::string text, const std::string& what) {
+    const std::string given = text;
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::istringstream in(text);
+    std::string x, y, z, extra;
+    in >> x >> y >> z;
+    if (z.empty() || (in >> extra)) usageError(what, " takes x,y,z, got '", given, "'");
+    return {parseNumber(x, what + " x"), parseNumber(y, what + " y"), parseNumber(z, what + " z")};
+}
+
+std::string lowercase(std::string s) {
+    for (char& c : s) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+    return s;
+}
+
+/// --out: a .png whose folder exists and is writable (checked here, before any work).
+void checkOutPath(const std::string& out) {
+    const fs::path path(out);
+    const std::string extension = lowercase(path.extension().string());
+    if (extension.empty()) usageError("--out '", out, "' has no extension (supported: .png)");
+    if (extension != ".png") usageError("--out '", out, "': unknown extension '", path.extension().string(), "' (supported: .png)");
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    std::error_code error;
+    if (!fs::is_directory(folder, error)) usageError("--out '", out, "': folder '", folder.string(), "' does not exist");
+    if (::access(folder.c_str(), W_OK) != 0)
+        usageError("--out '", out, "': folder '", folder.string(), "' is not writable (", std::strerror(errno), ")");
+    if (fs::is_directory(path, error)) usageError("--out '", out, "' is a folder");
+    if (fs::exists(path, error) && ::access(path.c_str(), W_OK) != 0)
+        usageError("--out '", out, "' exists and is not writable (", std::strerror(errno), ")");
+}
+
+void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
+    const bool hard = a.mode == "hard";
+    a.ground = !raw.no_ground;
+    for (const ModeFlag& f : kModeFlags) {
+        if (app.count(f.flag) > 0 && !(hard ? f.hard : f.reference))
+            usageError(f.flag, " is not used by --mode ", a.mode, " (", f.why_not, ")");
+    }
+    a.samples = parseCount(raw.samples, "--samples", 1, 1u << 16);
+    a.width = parseCount(raw.width, "--width", 1, 16384);
+    a.height = parseCount(raw.height, "--height", 1, 16384);
+    if (!raw.light_radius.empty()) {
+        a.light_radius = parseNumber(raw.light_radius, "--light-radius");
+        if (!(a.light_radius > 0)) usageError("--light-radius must be > 0, got '", raw.light_radius, "'");
+    }
+    if (!raw.light_pos.empty()) {
+        a.light_pos = parseVec3(raw.light_pos, "--light-pos");
+        a.has_light_pos = true;
+    }
+    checkOutPath(a.out);
+}
+
+// =============================================================================================
+// Checks that need the scene: the light, and memory
+
+/// Box of every mesh vertex (double).
+std::pair<glm::dvec3, glm::dvec3> sceneBounds(const penumbra::scene::Scene& scene) {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const auto& mesh : scene.meshes) {
+        for (const glm::vec3& p : mesh.positions) {
+            lo = glm::min(lo, glm::dvec3(p));
+            hi = glm::max(hi, glm::dvec3(p));
         }
     }
-    if (a.mode != "reference" && a.mode != "hard") usage("unknown --mode '" + a.mode + "' (available: reference, hard)");
-    return a;
+    return {lo, hi};
 }
+
+std::string vec3Text(const glm::dvec3& v) {
+    std::ostringstream out;
+    out.precision(9);
+    out << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+    return out.str();
+}
+
+/// The spherical light must stay clear of the scene: a radius no larger than the distance from
+/// its centre to the scene's bounds (larger spheres put light samples inside the geometry, and a
+/// huge one, e.g. 1e30, makes the oracle's work unbounded).
+void checkLight(const penumbra::scene::Scene& scene, const glm::dvec3& centre, double radius) {
+    const auto [lo, hi] = sceneBounds(scene);
+    if (!(lo.x <= hi.x)) return;  // no vertices: nothing to reach
+    const double distance = glm::length(centre - glm::clamp(centre, lo, hi));
+    if (radius >= distance) {
+        std::ostringstream out;
+        out.precision(9);
+        out << "the light (centre " << vec3Text(centre) << ", radius " << radius << ") reaches into the scene: its centre is "
+            << distance << " from the scene's bounds " << vec3Text(lo) << " .. " << vec3Text(hi)
+            << "; use --light-radius below " << distance << " or move it with --light-pos";
+        usageError(out.str());
+    }
+}
+
+uint64_t physicalMemoryBytes() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+}
+
+std::string gib(double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2f GiB", bytes / double(1ull << 30));
+    return text;
+}
+
+/// What the run will allocate, by part (rough upper bounds: every pixel a view sample).
+struct MemoryEstimate {
+    std::vector<std::pair<std::string, double>> parts;
+    double total() const {
+        double sum = 0;
+        for (const auto& p : parts) sum += p.second;
+        return sum;
+    }
+};
+
+MemoryEstimate estimateMemory(const Args& args, size_t triangles) {
+    const double pixels = double(args.width) * double(args.height);
+    MemoryEstimate m;
+    // Oracle: mesh in double, triangle records, BVH nodes, merged copies (~ 400 B per triangle).
+    m.parts.emplace_back("scene and oracle", 400.0 * double(triangles));
+    if (args.mode == "hard") {
+        // llvmpipe buffers live in host memory: G-buffer textures + SSBO copies (~ 100 B/pixel),
+        // lists sized for every pixel a sample (counts/offsets per light texel, position, id,
+        // slot, texel, state, shadow bit per sample: ~ 40 B), host read-backs (~ 52 B), counted
+        // twice for driver-side copies.
+        m.parts.emplace_back("G-buffer and view samples", 2.0 * 100.0 * pixels + 52.0 * pixels);
+        m.parts.emplace_back("sample lists", 2.0 * 40.0 * pixels);
+        if (args.reference) m.parts.emplace_back("oracle check", (24.0 + 4.0 + 8.0) * pixels);
+    } else {
+        const double words = std::ceil(double(args.samples) / 32.0);
+        m.parts.emplace_back("view samples", (8.0 + 24.0 + 4.0 + 24.0 + 24.0) * pixels);
+        m.parts.emplace_back("oracle masks (blocked + ties)", 2.0 * 4.0 * words * pixels);
+        m.parts.emplace_back("light samples", 24.0 * double(args.samples));
+    }
+    m.parts.emplace_back("image and PNG", 6.0 * pixels);
+    return m;
+}
+
+/// Refuses a run whose estimate exceeds 80% of the machine's physical memory, with the numbers.
+void checkMemory(const Args& args, size_t triangles) {
+    const MemoryEstimate m = estimateMemory(args, triangles);
+    const uint64_t physical = physicalMemoryBytes();
+    if (physical == 0 || m.total() <= 0.8 * double(physical)) return;
+    std::ostringstream out;
+    out << args.width << "x" << args.height;
+    if (args.mode == "reference") out << " with " << args.samples << " light samples";
+    out << " needs about " << gib(m.total()) << " (";
+    for (size_t i = 0; i < m.parts.size(); ++i) out << (i ? ", " : "") << m.parts[i].first << " " << gib(m.parts[i].second);
+    out << ") but this machine has " << gib(double(physical))
+        << " of memory (sysconf: physical pages; the limit is 80%); use a smaller --width/--height";
+    if (args.mode == "reference") out << " or fewer --samples";
+    usageError(out.str());
+}
+
+// =============================================================================================
+// Running
 
 double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::string jsonEscape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += c;
-        }
+/// Percent done on stderr, at most every few seconds (so short runs print nothing).
+class Progress {
+public:
+    Progress(const char* what, size_t total) : what_(what), total_(total) {}
+    void update(size_t done) {
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_ < std::chrono::seconds(kIntervalSeconds) || total_ == 0) return;
+        last_ = now;
+        printed_ = true;
+        std::fprintf(stderr, "soft_shadows: %s %5.1f%% (%zu of %zu, %.0f s)\n", what_, 100.0 * double(done) / double(total_),
+                     done, total_, msSince(start_) / 1000.0);
     }
-    return out;
-}
+    ~Progress() {
+        if (printed_) std::fprintf(stderr, "soft_shadows: %s done (%.0f s)\n", what_, msSince(start_) / 1000.0);
+    }
 
-// Runs body(i) for i in [0, n) on all cores.
+private:
+    static constexpr int kIntervalSeconds = 3;
+    const char* what_;
+    size_t total_;
+    std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_ = start_;
+    bool printed_ = false;
+};
+
+/// Runs body(i) for i in [0, n) on all cores.
 template <typename Body>
-void parallelFor(size_t n, Body body) {
-    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+void parallelFor(size_t begin, size_t end, Body body) {
+    const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
     std::vector<std::thread> pool;
     for (unsigned t = 0; t < threads; ++t) {
         pool.emplace_back([&, t] {
-            for (size_t i = t; i < n; i += threads) body(i);
+            for (size_t i = begin + t; i < end; i += threads) body(i);
         });
     }
     for (auto& th : pool) th.join();
 }
 
+/// Chunks of about 1/200 of the work (at least `min_chunk` items), reporting progress after each.
+template <typename Body>
+void inChunks(size_t n, size_t min_chunk, Progress& progress, Body body) {
+    const size_t chunk = std::max(min_chunk, (n + 199) / 200);
+    for (size_t begin = 0; begin < n; begin += chunk) {
+        const size_t end = std::min(n, begin + chunk);
+        body(begin, end);
+        progress.update(end);
+    }
+}
+
+/// oracle.evaluate in chunks of receivers (the oracle has no progress hook): same bits, since
+/// every pair is computed independently.
+penumbra::reference::VisibilityResult evaluateWithProgress(const penumbra::reference::VisibilityOracle& oracle,
+                                                           const std::vector<glm::dvec3>& receivers,
+                                                           const std::vector<glm::dvec3>& samples,
+                                                           const penumbra::reference::VisibilityOptions& options,
+                                                           const char* what) {
+    penumbra::reference::VisibilityResult all;
+    all.receivers = receivers.size();
+    all.samples = samples.size();
+    all.words_per_receiver = static_cast<uint32_t>((samples.size() + 31) / 32);
+    all.blocked.assign(receivers.size() * all.words_per_receiver, 0u);
+    all.ties.assign(all.blocked.size(), 0u);
+    Progress progress(what, receivers.size());
+    std::vector<glm::dvec3> part;
+    inChunks(receivers.size(), 1024, progress, [&](size_t begin, size_t end) {
+        part.assign(receivers.begin() + static_cast<std::ptrdiff_t>(begin), receivers.begin() + static_cast<std::ptrdiff_t>(end));
+        const penumbra::reference::VisibilityResult r = oracle.evaluate(part, samples, options);
+        std::copy(r.blocked.begin(), r.blocked.end(), all.blocked.begin() + static_cast<std::ptrdiff_t>(begin * all.words_per_receiver));
+        std::copy(r.ties.begin(), r.ties.end(), all.ties.begin() + static_cast<std::ptrdiff_t>(begin * all.words_per_receiver));
+        all.tie_count += r.tie_count;
+        all.nodes_visited += r.nodes_visited;
+        all.triangle_tests += r.triangle_tests;
+    });
+    return all;
+}
+
+Json reportHead(const Args& args, const char* mode) {
+    Json j;
+    j["penumbra_version"] = std::to_string(penumbra::kVersionMajor) + "." + std::to_string(penumbra::kVersionMinor) + "." +
+                            std::to_string(penumbra::kVersionPatch);
+    j["scene"] = args.scene;
+    j["mode"] = mode;
+    return j;
+}
+
+/// One line on stdout; a path that is not UTF-8 gets U+FFFD instead of failing the report.
+void printReport(const Json& j) {
+    std::printf("%s\n", j.dump(-1, ' ', false, Json::error_handler_t::replace).c_str());
+}
+
+Json vec3Json(const glm::dvec3& v) { return Json::array({v.x, v.y, v.z}); }
+
+/// The scene merged into one triangle list, with a per-triangle material (0 = ground).
+struct MergedScene {
+    std::vector<glm::dvec3> positions, normals;
+    std::vector<uint32_t> indices;
+    std::vector<uint8_t> material;
+};
+
+MergedScene merge(const penumbra::scene::Scene& scene) {
+    MergedScene m;
+    for (const auto& mesh : scene.meshes) {
+        const uint32_t base = static_cast<uint32_t>(m.positions.size());
+        for (size_t v = 0; v < mesh.positions.size(); ++v) {
+            m.positions.emplace_back(mesh.positions[v]);
+            m.normals.emplace_back(v < mesh.normals.size() ? glm::dvec3(mesh.normals[v]) : glm::dvec3(0, 1, 0));
+        }
+        for (uint32_t idx : mesh.indices) m.indices.push_back(base + idx);
+        m.material.insert(m.material.end(), mesh.indices.size() / 3, mesh.name == "ground" ? 0 : 1);
+    }
+    return m;
+}
 
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
@@ -181,8 +454,6 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     options.grid_height = h;
     options.count_work = true;
     penumbra::AliasFreeHardShadows pipeline(options);
-    std::vector<uint8_t> closed;
-    for (const auto& r : gpu.ranges()) closed.insert(closed.end(), r.index_count / 3, r.closed ? 1 : 0);
     auto draw = [&](penumbra::CasterClass cls) {
         for (const auto& r : gpu.ranges()) {
             if (r.closed == (cls == penumbra::CasterClass::Closed)) gpu.draw(r);
@@ -210,7 +481,8 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         }
         penumbra::reference::VisibilityOptions vo;
         vo.coplanar_epsilon = options.coplanar_epsilon;
-        const auto result = oracle.evaluate(receivers, {glm::dvec3(glm::vec3(light.light))}, vo);
+        const auto result =
+            evaluateWithProgress(oracle, receivers, {glm::dvec3(glm::vec3(light.light))}, vo, "oracle check");
         tested = receivers.size();
         for (size_t r = 0; r < receivers.size(); ++r) {
             if (result.isTie(r, 0)) {
@@ -251,25 +523,27 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     const double shade_ms = msSince(t0);
     const double total_ms = msSince(t_start);
     if (args.json) {
-        std::printf(
-            "{\"penumbra_version\":\"%d.%d.%d\",\"scene\":\"%s\",\"mode\":\"hard\",\"renderer\":\"%s\",\"width\":%u,"
-            "\"height\":%u,\"triangles\":%zu,\"view_samples\":%zu,\"light_samples\":1,"
-            "\"light\":{\"position\":[%.9g,%.9g,%.9g],\"radius\":0},"
-            "\"hard\":{\"tested\":%zu,\"shadowed\":%zu,\"passes\":%u,\"max_list_length\":%u,\"occupancy\":%.6f,"
-            "\"fragments\":%llu,\"tests\":%llu,\"triangles_emitted\":%llu}",
-            penumbra::kVersionMajor, penumbra::kVersionMinor, penumbra::kVersionPatch, jsonEscape(args.scene).c_str(),
-            jsonEscape(context.renderer()).c_str(), w, h, oracle.triangleCount(),
-            view_samples, light_pos.x, light_pos.y, light_pos.z,
-            static_cast<size_t>(frame.statistics.listed_samples), shadowed, frame.passes,
-            frame.statistics.max_list_length, frame.statistics.occupancy(),
-            static_cast<unsigned long long>(frame.fragments), static_cast<unsigned long long>(frame.tests),
-            static_cast<unsigned long long>(frame.triangles_emitted));
-        if (args.reference) {
-            std::printf(",\"reference\":{\"samples\":%zu,\"mismatched\":%zu,\"ties\":%zu}", tested, mismatched, ties);
-        }
-        std::printf(",\"timings_ms\":{\"load\":%.3f,\"gbuffer\":%.3f,\"shadows\":%.3f,\"reference\":%.3f,"
-                    "\"shade_and_write\":%.3f,\"total\":%.3f},\"out\":\"%s\"}\n",
-                    load_ms, gbuffer_ms, shadows_ms, reference_ms, shade_ms, total_ms, jsonEscape(args.out).c_str());
+        Json j = reportHead(args, "hard");
+        j["renderer"] = context.renderer();
+        j["width"] = w;
+        j["height"] = h;
+        j["triangles"] = oracle.triangleCount();
+        j["view_samples"] = view_samples;
+        j["light_samples"] = 1;
+        j["light"] = {{"position", vec3Json(light_pos)}, {"radius", 0}};
+        j["hard"] = {{"tested", static_cast<size_t>(frame.statistics.listed_samples)},
+                     {"shadowed", shadowed},
+                     {"passes", frame.passes},
+                     {"max_list_length", frame.statistics.max_list_length},
+                     {"occupancy", frame.statistics.occupancy()},
+                     {"fragments", frame.fragments},
+                     {"tests", frame.tests},
+                     {"triangles_emitted", frame.triangles_emitted}};
+        if (args.reference) j["reference"] = {{"samples", tested}, {"mismatched", mismatched}, {"ties", ties}};
+        j["timings_ms"] = {{"load", load_ms},        {"gbuffer", gbuffer_ms},        {"shadows", shadows_ms},
+                           {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", total_ms}};
+        j["out"] = args.out;
+        printReport(j);
     } else {
         std::printf("%s (hard, %s): %zu triangles, %zu samples tested, %zu shadowed, %.1f ms shadows -> %s\n",
                     args.scene.c_str(), context.renderer().c_str(), oracle.triangleCount(),
@@ -279,140 +553,175 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     return 0;
 }
 
+// --mode reference: soft shadows from the oracle, every (view sample, light sample) pair.
+int runReference(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+                 const MergedScene& merged, const glm::dvec3& light_pos, double light_radius, double load_ms,
+                 std::chrono::steady_clock::time_point t_start) {
+    const std::vector<glm::dvec3> light_samples =
+        penumbra::reference::sphereLightSamples(light_pos, light_radius, args.samples, 1);
+
+    // ---- view samples: one primary ray per pixel ----
+    auto t0 = std::chrono::steady_clock::now();
+    const uint32_t w = args.width, h = args.height;
+    const glm::dmat4 inv_view_proj =
+        glm::inverse(glm::dmat4(scene.camera.projection(float(w) / float(h))) * glm::dmat4(scene.camera.view()));
+    const size_t pixels = size_t(w) * h;
+    std::vector<int64_t> pixel_sample(pixels, -1);
+    std::vector<glm::dvec3> hit_normal(pixels);
+    std::vector<uint32_t> hit_triangle(pixels);
+    std::vector<glm::dvec3> hit_point(pixels);
+    const glm::dvec3 eye(scene.camera.eye);
+    {
+        Progress progress("primary rays", pixels);
+        inChunks(pixels, w, progress, [&](size_t begin, size_t end) {
+            parallelFor(begin, end, [&](size_t i) {
+                const double x = (double(i % w) + 0.5) / w * 2.0 - 1.0;
+                const double y = 1.0 - (double(i / w) + 0.5) / h * 2.0;  // row 0 is the top of the image
+                glm::dvec4 far_point = inv_view_proj * glm::dvec4(x, y, 1.0, 1.0);
+                glm::dvec3 dir = glm::normalize(glm::dvec3(far_point) / far_point.w - eye);
+                penumbra::reference::Hit hit = oracle.closestHit(eye, dir, 0.0, 1e30);
+                if (!hit.hit) return;
+                const uint32_t* tri = &merged.indices[size_t(hit.triangle) * 3];
+                const double u = hit.u, v = hit.v;
+                glm::dvec3 n = (1.0 - u - v) * merged.normals[tri[0]] + u * merged.normals[tri[1]] + v * merged.normals[tri[2]];
+                if (glm::dot(n, n) < 1e-20) {
+                    n = glm::cross(merged.positions[tri[1]] - merged.positions[tri[0]],
+                                   merged.positions[tri[2]] - merged.positions[tri[0]]);
+                }
+                n = glm::normalize(n);
+                if (glm::dot(n, dir) > 0) n = -n;  // open meshes: shade the side we see
+                hit_point[i] = eye + hit.t * dir;
+                hit_normal[i] = n;
+                hit_triangle[i] = hit.triangle;
+                pixel_sample[i] = 0;
+            });
+        });
+    }
+    std::vector<glm::dvec3> receivers;
+    for (size_t i = 0; i < pixel_sample.size(); ++i) {
+        if (pixel_sample[i] < 0) continue;
+        pixel_sample[i] = static_cast<int64_t>(receivers.size());
+        receivers.push_back(hit_point[i]);
+    }
+    const double primary_ms = msSince(t0);
+
+    // ---- visibility: the exact oracle, every (view sample, light sample) pair ----
+    t0 = std::chrono::steady_clock::now();
+    const penumbra::reference::VisibilityResult visibility =
+        evaluateWithProgress(oracle, receivers, light_samples, {}, "oracle visibility");
+    const double visibility_ms = msSince(t0);
+
+    // ---- shade: Lambert with the sampled visibility, sRGB out ----
+    t0 = std::chrono::steady_clock::now();
+    penumbra::scene::ImageRgb8 image;
+    image.width = w;
+    image.height = h;
+    image.pixels.assign(pixels * 3, 0);
+    const glm::dvec3 albedo[2] = {{0.75, 0.75, 0.72}, {0.85, 0.45, 0.2}};
+    const glm::dvec3 sky(0.08, 0.09, 0.12);
+    double lit_sum = 0;
+    for (size_t i = 0; i < pixel_sample.size(); ++i) {
+        glm::dvec3 c = sky;
+        if (pixel_sample[i] >= 0) {
+            const size_t r = static_cast<size_t>(pixel_sample[i]);
+            const double vis = visibility.visibleFraction(r);
+            lit_sum += vis;
+            const glm::dvec3 l = glm::normalize(light_pos - hit_point[i]);
+            const double ndotl = std::max(0.0, glm::dot(hit_normal[i], l));
+            c = albedo[merged.material[hit_triangle[i]]] * (0.12 + 0.88 * ndotl * vis);
+        }
+        for (int k = 0; k < 3; ++k) image.pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[k]));
+    }
+    penumbra::scene::writePng(args.out, image);
+    const double shade_ms = msSince(t0);
+
+    const double total_ms = msSince(t_start);
+    if (args.json) {
+        Json j = reportHead(args, "reference");
+        j["width"] = w;
+        j["height"] = h;
+        j["triangles"] = oracle.triangleCount();
+        j["view_samples"] = receivers.size();
+        j["light_samples"] = light_samples.size();
+        j["light"] = {{"position", vec3Json(light_pos)}, {"radius", light_radius}};
+        j["mean_visible_fraction"] = receivers.empty() ? 0.0 : lit_sum / double(receivers.size());
+        j["reference"] = {{"ties", visibility.tie_count}, {"pairs", uint64_t(receivers.size()) * light_samples.size()}};
+        j["timings_ms"] = {{"load", load_ms},
+                           {"view_samples", primary_ms},
+                           {"visibility", visibility_ms},
+                           {"shade_and_write", shade_ms},
+                           {"total", total_ms}};
+        j["out"] = args.out;
+        printReport(j);
+    } else {
+        std::printf("%s: %zu triangles, %zu view samples x %zu light samples, %.1f ms -> %s\n", args.scene.c_str(),
+                    oracle.triangleCount(), receivers.size(), light_samples.size(), total_ms, args.out.c_str());
+    }
+    return 0;
+}
+
+penumbra::scene::Scene loadScene(const Args& args) {
+    penumbra::scene::Scene scene;
+    if (args.scene.rfind("builtin:", 0) == 0) {
+        scene = penumbra::scene::load(args.scene);
+        if (!args.ground) {
+            scene.meshes.erase(std::remove_if(scene.meshes.begin(), scene.meshes.end(),
+                                              [](const penumbra::scene::Mesh& m) { return m.name == "ground"; }),
+                               scene.meshes.end());
+        }
+    } else {
+        penumbra::scene::ObjOptions options;
+        options.ground = args.ground;
+        scene = penumbra::scene::loadObj(args.scene, options);
+    }
+    return scene;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    const Args args = parseArgs(argc, argv);
+    Args args;
+    RawArgs raw;
+    CLI::App app{"soft_shadows: renders a scene lit by a spherical light with penumbra and writes a PNG "
+                 "(and, with --json, a one-line JSON report on stdout).",
+                 "soft_shadows"};
+    app.footer("Modes:\n"
+               "  reference  every pixel's visibility of --samples light samples (a spherical light) from the exact\n"
+               "             double-precision oracle on the CPU: soft shadows\n"
+               "  hard       the GPU alias-free hard-shadow pipeline from the light's centre on a headless GL context\n"
+               "             (PENUMBRA_GL=egl|osmesa); --reference adds the oracle's verdict on the same samples\n"
+               "Built-in scenes: torus_knot columns hairball grass. Progress of long phases goes to stderr.\n"
+               "Exit codes: 0 done, 1 failed while running, 2 bad arguments or a run that cannot work.");
+    addOptions(app, args, raw);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int code = app.exit(e);  // --help: prints the help, 0
+        return code == 0 ? 0 : 2;
+    }
     const auto t_start = std::chrono::steady_clock::now();
     try {
+        checkArgs(app, args, raw);
+        checkMemory(args, 0);  // sizes that cannot run whatever the scene: before loading it
+
         // ---- scene ----
         auto t0 = std::chrono::steady_clock::now();
-        penumbra::scene::Scene scene;
-        if (args.scene.rfind("builtin:", 0) == 0) {
-            scene = penumbra::scene::load(args.scene);
-            if (!args.ground) {
-                scene.meshes.erase(std::remove_if(scene.meshes.begin(), scene.meshes.end(),
-                                                  [](const penumbra::scene::Mesh& m) { return m.name == "ground"; }),
-                                   scene.meshes.end());
-            }
-        } else {
-            penumbra::scene::ObjOptions options;
-            options.ground = args.ground;
-            scene = penumbra::scene::loadObj(args.scene, options);
-        }
-        // Merge with a per-triangle material: mesh 0 is the ground when present.
-        std::vector<glm::dvec3> positions;
-        std::vector<glm::dvec3> normals;
-        std::vector<uint32_t> indices;
-        std::vector<uint8_t> material;
-        for (const auto& mesh : scene.meshes) {
-            const uint32_t base = static_cast<uint32_t>(positions.size());
-            for (size_t v = 0; v < mesh.positions.size(); ++v) {
-                positions.emplace_back(mesh.positions[v]);
-                normals.emplace_back(v < mesh.normals.size() ? glm::dvec3(mesh.normals[v]) : glm::dvec3(0, 1, 0));
-            }
-            for (uint32_t idx : mesh.indices) indices.push_back(base + idx);
-            material.insert(material.end(), mesh.indices.size() / 3, mesh.name == "ground" ? 0 : 1);
-        }
-        penumbra::reference::VisibilityOracle oracle(positions, indices);
+        const penumbra::scene::Scene scene = loadScene(args);
+        const glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
+        const double light_radius = args.light_radius > 0 ? args.light_radius : double(scene.light.radius);
+        if (args.mode == "reference") checkLight(scene, light_pos, light_radius);
+        checkMemory(args, scene.triangleCount());
+
+        const MergedScene merged = merge(scene);
+        const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
         const double load_ms = msSince(t0);
-
-        glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
-        double light_radius = args.light_radius >= 0 ? args.light_radius : scene.light.radius;
-        if (args.mode == "hard") return runHard(args, scene, oracle, material, light_pos, load_ms, t_start);
-        const std::vector<glm::dvec3> light_samples =
-            penumbra::reference::sphereLightSamples(light_pos, light_radius, args.samples, 1);
-
-        // ---- view samples: one primary ray per pixel ----
-        t0 = std::chrono::steady_clock::now();
-        const uint32_t w = args.width, h = args.height;
-        const glm::dmat4 inv_view_proj = glm::inverse(glm::dmat4(scene.camera.projection(float(w) / float(h))) *
-                                                      glm::dmat4(scene.camera.view()));
-        std::vector<int64_t> pixel_sample(size_t(w) * h, -1);
-        std::vector<glm::dvec3> hit_normal(size_t(w) * h);
-        std::vector<uint32_t> hit_triangle(size_t(w) * h);
-        std::vector<glm::dvec3> hit_point(size_t(w) * h);
-        const glm::dvec3 eye(scene.camera.eye);
-        parallelFor(size_t(w) * h, [&](size_t i) {
-            const double x = (double(i % w) + 0.5) / w * 2.0 - 1.0;
-            const double y = 1.0 - (double(i / w) + 0.5) / h * 2.0;  // row 0 is the top of the image
-            glm::dvec4 far_point = inv_view_proj * glm::dvec4(x, y, 1.0, 1.0);
-            glm::dvec3 dir = glm::normalize(glm::dvec3(far_point) / far_point.w - eye);
-            penumbra::reference::Hit hit = oracle.closestHit(eye, dir, 0.0, 1e30);
-            if (!hit.hit) return;
-            const uint32_t* tri = &indices[size_t(hit.triangle) * 3];
-            const double u = hit.u, v = hit.v;
-            glm::dvec3 n = (1.0 - u - v) * normals[tri[0]] + u * normals[tri[1]] + v * normals[tri[2]];
-            if (glm::dot(n, n) < 1e-20) {
-                n = glm::cross(positions[tri[1]] - positions[tri[0]], positions[tri[2]] - positions[tri[0]]);
-            }
-            n = glm::normalize(n);
-            if (glm::dot(n, dir) > 0) n = -n;  // open meshes: shade the side we see
-            hit_point[i] = eye + hit.t * dir;
-            hit_normal[i] = n;
-            hit_triangle[i] = hit.triangle;
-            pixel_sample[i] = 0;
-        });
-        std::vector<glm::dvec3> receivers;
-        for (size_t i = 0; i < pixel_sample.size(); ++i) {
-            if (pixel_sample[i] < 0) continue;
-            pixel_sample[i] = static_cast<int64_t>(receivers.size());
-            receivers.push_back(hit_point[i]);
-        }
-        const double primary_ms = msSince(t0);
-
-        // ---- visibility: the exact oracle, every (view sample, light sample) pair ----
-        t0 = std::chrono::steady_clock::now();
-        penumbra::reference::VisibilityResult visibility = oracle.evaluate(receivers, light_samples);
-        const double visibility_ms = msSince(t0);
-
-        // ---- shade: Lambert with the sampled visibility, sRGB out ----
-        t0 = std::chrono::steady_clock::now();
-        penumbra::scene::ImageRgb8 image;
-        image.width = w;
-        image.height = h;
-        image.pixels.assign(size_t(w) * h * 3, 0);
-        const glm::dvec3 albedo[2] = {{0.75, 0.75, 0.72}, {0.85, 0.45, 0.2}};
-        const glm::dvec3 sky(0.08, 0.09, 0.12);
-        double lit_sum = 0;
-        for (size_t i = 0; i < pixel_sample.size(); ++i) {
-            glm::dvec3 c = sky;
-            if (pixel_sample[i] >= 0) {
-                const size_t r = static_cast<size_t>(pixel_sample[i]);
-                const double vis = visibility.visibleFraction(r);
-                lit_sum += vis;
-                const glm::dvec3 l = glm::normalize(light_pos - hit_point[i]);
-                const double ndotl = std::max(0.0, glm::dot(hit_normal[i], l));
-                c = albedo[material[hit_triangle[i]]] * (0.12 + 0.88 * ndotl * vis);
-            }
-            for (int k = 0; k < 3; ++k) image.pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[k]));
-        }
-        penumbra::scene::writePng(args.out, image);
-        const double shade_ms = msSince(t0);
-
-        const double total_ms = msSince(t_start);
-        if (args.json) {
-            std::printf(
-                "{\"penumbra_version\":\"%d.%d.%d\",\"scene\":\"%s\",\"mode\":\"%s\",\"width\":%u,\"height\":%u,"
-                "\"triangles\":%zu,\"view_samples\":%zu,\"light_samples\":%zu,"
-                "\"light\":{\"position\":[%.9g,%.9g,%.9g],\"radius\":%.9g},"
-                "\"mean_visible_fraction\":%.9g,\"reference\":{\"ties\":%llu,\"pairs\":%llu},"
-                "\"timings_ms\":{\"load\":%.3f,\"view_samples\":%.3f,\"visibility\":%.3f,\"shade_and_write\":%.3f,"
-                "\"total\":%.3f},\"out\":\"%s\"}\n",
-                penumbra::kVersionMajor, penumbra::kVersionMinor, penumbra::kVersionPatch,
-                jsonEscape(args.scene).c_str(), args.mode.c_str(), w, h, oracle.triangleCount(), receivers.size(),
-                light_samples.size(), light_pos.x, light_pos.y, light_pos.z, light_radius,
-                receivers.empty() ? 0.0 : lit_sum / double(receivers.size()),
-                static_cast<unsigned long long>(visibility.tie_count),
-                static_cast<unsigned long long>(receivers.size() * light_samples.size()), load_ms, primary_ms,
-                visibility_ms, shade_ms, total_ms, jsonEscape(args.out).c_str());
-        } else {
-            std::printf("%s: %zu triangles, %zu view samples x %zu light samples, %.1f ms -> %s\n", args.scene.c_str(),
-                        oracle.triangleCount(), receivers.size(), light_samples.size(), total_ms, args.out.c_str());
-        }
+        if (args.mode == "hard") return runHard(args, scene, oracle, merged.material, light_pos, load_ms, t_start);
+        return runReference(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "soft_shadows: %s\n(soft_shadows --help lists the options)\n", e.what.c_str());
+        return 2;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "soft_shadows: %s\n", e.what());
         return 1;
     }
-    return 0;
 }

@@ -1,5 +1,7 @@
 // penumbra scene helpers on the GPU — what an engine already has and penumbra's tests, benchmarks
 // and examples need: meshes in GL buffers and a G-buffer pass producing view samples.
+// Part of penumbra::support (support/include/; a core install has none of it, see CMakeLists.txt:
+// PENUMBRA_BUILD_SUPPORT). CMake target penumbra::support links tinyobjloader and stb.
 //
 // Integration summary
 //   needs:    a current GL 4.5 context (PENUMBRA_GL_HEADER, see gl/gl.hpp); penumbra/scene/scene.hpp.

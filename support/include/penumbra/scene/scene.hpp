@@ -1,6 +1,8 @@
 // penumbra::scene — procedural test scenes for soft-shadow tests, examples and benchmarks.
+// Part of penumbra::support (support/include/; a core install has none of it, see CMakeLists.txt:
+// PENUMBRA_BUILD_SUPPORT). CMake target penumbra::support links tinyobjloader and stb.
 //
-// Integration: header-only, needs GLM and include/penumbra/error.hpp; no GL, no files, no links.
+// Integration: header-only, needs GLM and penumbra/error.hpp; no GL, no files, no links.
 // Produces plain indexed triangle meshes (positions, per-vertex unit normals, uint32 triangle
 // lists with counter-clockwise front faces) gathered in a Scene with a default Camera and a
 // spherical Light. Conventions shared by every scene:

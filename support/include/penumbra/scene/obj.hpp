@@ -1,4 +1,6 @@
 // penumbra::scene OBJ loading — Wavefront OBJ files as penumbra scenes, via tinyobjloader.
+// Part of penumbra::support (support/include/; a core install has none of it, see CMakeLists.txt:
+// PENUMBRA_BUILD_SUPPORT). CMake target penumbra::support links tinyobjloader and stb.
 //
 // Integration: needs tinyobjloader's header <tiny_obj_loader.h> and its compiled library: link
 // tinyobjloader (CMake target tinyobjloader::tinyobjloader, or -ltinyobjloader). Do NOT define
@@ -17,7 +19,16 @@
 //     per vertex); otherwise, or if absent, smooth angle-weighted normals are computed;
 //   - closed = every edge shared by exactly two triangles with opposite orientation; a closed
 //     mesh with negative signed volume (inside-out) is flipped so that it faces outward.
-// Failures throw penumbra::Error naming the path and the reason.
+// Before tinyobjloader sees the text, a validating pass reads every statement loadObj uses and
+// rejects, naming the line number and the offending text: numbers that do not parse (strict
+// decimal: `nan`, `inf`, hex and trailing garbage are errors, where tinyobjloader would read 0),
+// coordinates beyond float range, `v`/`vn` lines with fewer than 3 numbers, face indices that are
+// 0, overflow int, or lie outside the vertices / texture coordinates / normals of the file
+// (negative = relative to those defined so far), and faces of more than 255 corners. Only
+// `v`, `vt`, `vn`, `f`, `o` and `g` statements reach tinyobjloader; everything else (materials,
+// smoothing groups, lines, points, tinyobjloader's `vw`/`t` extensions) is ignored.
+// Failures throw penumbra::Error naming the path (or parseObj's name) and the reason; nothing
+// else escapes (tests/fuzz/obj_fuzz.cpp checks that on arbitrary bytes).
 #ifndef PENUMBRA_SCENE_OBJ_HPP
 #define PENUMBRA_SCENE_OBJ_HPP
 
@@ -29,9 +40,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cfloat>
+#include <charconv>
+#include <climits>
 #include <cstdint>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -46,10 +63,15 @@ struct ObjOptions {
 };
 
 /// Loads a Wavefront OBJ file as a Scene (see the summary above for what is kept and how).
-/// Throws penumbra::Error naming `path` when the file cannot be opened or parsed, a face uses a
-/// vertex index that does not exist, a used vertex has a NaN or infinite coordinate, no
-/// triangle is left, or all vertices coincide.
+/// Throws penumbra::Error naming `path` when the file cannot be opened or read, a statement is
+/// malformed (the message names its line and value, see the summary), no triangle is left, or
+/// all vertices coincide.
 inline Scene loadObj(const std::string& path, const ObjOptions& options = {});
+
+/// The same from OBJ text in memory (no file access; `mtllib` is ignored like every material).
+/// `name` names the mesh (its stem, as for a path) and the errors.
+inline Scene parseObj(const std::string& text, const std::string& name = "memory.obj",
+                      const ObjOptions& options = {});
 
 /// "builtin:NAME" -> builtin(NAME); anything else is a path for loadObj with default options.
 inline Scene load(const std::string& spec);
@@ -121,6 +143,199 @@ inline void triangulatePolygon(const std::vector<glm::vec3>& corners,
     triangles.push_back({remaining[0], remaining[1], remaining[2]});
 }
 
+inline bool isObjSpace(char c) { return c == ' ' || c == '\t'; }
+
+/// Splits a line at spaces and tabs.
+inline void splitObjTokens(std::string_view line, std::vector<std::string_view>& tokens) {
+    tokens.clear();
+    size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && isObjSpace(line[i])) ++i;
+        const size_t start = i;
+        while (i < line.size() && !isObjSpace(line[i])) ++i;
+        if (i > start) tokens.push_back(line.substr(start, i - start));
+    }
+}
+
+/// Quotes a token for a message: printable ASCII as is, other bytes as \xNN, long ones cut.
+inline std::string quoteObjToken(std::string_view token) {
+    static const char kHex[] = "0123456789abcdef";
+    std::string out = "'";
+    for (size_t i = 0; i < token.size() && i < 40; ++i) {
+        const auto c = static_cast<unsigned char>(token[i]);
+        if (c >= 0x20 && c < 0x7f) {
+            out += static_cast<char>(c);
+        } else {
+            out += "\\x";
+            out += kHex[c >> 4];
+            out += kHex[c & 15];
+        }
+    }
+    if (token.size() > 40) out += "...";
+    return out + "'";
+}
+
+/// Strict decimal number: [+-]? (digits [. digits] | . digits) ([eE] [+-]? digits), parsed
+/// locale-independently. False for anything else (nan, inf, hex, empty, trailing characters).
+inline bool parseObjNumber(std::string_view token, double& value, bool& out_of_range) {
+    out_of_range = false;
+    size_t i = 0;
+    const size_t n = token.size();
+    auto digit = [&](size_t k) { return k < n && token[k] >= '0' && token[k] <= '9'; };
+    if (i < n && (token[i] == '+' || token[i] == '-')) ++i;
+    size_t digits = 0;
+    while (digit(i)) ++i, ++digits;
+    if (i < n && token[i] == '.') {
+        ++i;
+        while (digit(i)) ++i, ++digits;
+    }
+    if (digits == 0) return false;
+    if (i < n && (token[i] == 'e' || token[i] == 'E')) {
+        ++i;
+        if (i < n && (token[i] == '+' || token[i] == '-')) ++i;
+        if (!digit(i)) return false;
+        while (digit(i)) ++i;
+    }
+    if (i != n) return false;
+    const char* first = token.data() + (token[0] == '+' ? 1 : 0);  // from_chars takes no '+'
+    const std::from_chars_result result = std::from_chars(first, token.data() + n, value);
+    if (result.ec == std::errc::result_out_of_range) {
+        out_of_range = true;
+        return true;
+    }
+    return result.ec == std::errc() && result.ptr == token.data() + n;
+}
+
+/// Strict integer index [+-]?digits that fits an int (tinyobjloader parses it with atoi).
+inline bool parseObjIndex(std::string_view token, long long& value, bool& overflow) {
+    overflow = false;
+    size_t i = 0;
+    bool negative = false;
+    if (i < token.size() && (token[i] == '+' || token[i] == '-')) negative = token[i++] == '-';
+    if (i == token.size()) return false;
+    long long magnitude = 0;
+    for (; i < token.size(); ++i) {
+        if (token[i] < '0' || token[i] > '9') return false;
+        magnitude = magnitude * 10 + (token[i] - '0');
+        if (magnitude > 1ll + INT_MAX) overflow = true, magnitude = 1ll + INT_MAX;
+    }
+    value = negative ? -magnitude : magnitude;
+    if (value > INT_MAX || value < INT_MIN) overflow = true;
+    return true;
+}
+
+/// The validating pass (see the header summary): returns the text tinyobjloader gets, with the
+/// same line numbering (dropped statements become empty lines); throws naming line and value.
+inline std::string validateObjText(const std::string& text, const std::string& where) {
+    // Lines end at \n, \r\n or a lone \r, as in tinyobjloader.
+    std::vector<std::string_view> lines;
+    {
+        const std::string_view all(text);
+        size_t start = 0;
+        for (size_t i = 0; i < all.size(); ++i) {
+            if (all[i] != '\n' && all[i] != '\r') continue;
+            lines.push_back(all.substr(start, i - start));
+            if (all[i] == '\r' && i + 1 < all.size() && all[i + 1] == '\n') ++i;
+            start = i + 1;
+        }
+        if (start < all.size()) lines.push_back(all.substr(start));
+    }
+    std::vector<std::string_view> tokens;
+    // Pass 1: how many v / vt / vn the file defines (positive face indices may point forward).
+    size_t totals[3] = {0, 0, 0};
+    for (std::string_view line : lines) {
+        size_t i = 0;
+        while (i < line.size() && isObjSpace(line[i])) ++i;
+        if (i >= line.size() || line[i] != 'v') continue;
+        const std::string_view rest = line.substr(i + 1);
+        if (!rest.empty() && isObjSpace(rest[0])) ++totals[0];
+        else if (rest.size() >= 2 && rest[0] == 't' && isObjSpace(rest[1])) ++totals[1];
+        else if (rest.size() >= 2 && rest[0] == 'n' && isObjSpace(rest[1])) ++totals[2];
+    }
+    size_t defined[3] = {0, 0, 0};
+    static const char* const kKinds[3] = {"vertex", "texture coordinate", "normal"};
+    static const char* const kKindsPlural[3] = {"vertices", "texture coordinates", "normals"};
+    std::string out;
+    out.reserve(text.size() + 1);
+    for (size_t l = 0; l < lines.size(); ++l) {
+        const size_t line_number = l + 1;
+        splitObjTokens(lines[l], tokens);
+        auto failAt = [&](const auto&... what) { ::penumbra::detail::fail(where, "line ", line_number, ": ", what...); };
+        const std::string_view keyword = tokens.empty() ? std::string_view() : tokens[0];
+        int kind = -1;
+        if (keyword == "v") kind = 0;
+        else if (keyword == "vt") kind = 1;
+        else if (keyword == "vn") kind = 2;
+        if (kind >= 0) {
+            const size_t count = tokens.size() - 1;
+            const size_t min_count = kind == 1 ? 1 : 3, max_count = kind == 0 ? 7 : 3;
+            const size_t number = defined[kind] + 1;
+            if (count < min_count)
+                failAt("'", keyword, "' (", kKinds[kind], " ", number, ") needs ", min_count == 1 ? "a value" : "3 coordinates",
+                       ", found ", count);
+            if (count > max_count)
+                failAt("'", keyword, "' (", kKinds[kind], " ", number, ") has ", count, " values, at most ", max_count);
+            for (size_t t = 1; t < tokens.size(); ++t) {
+                double value = 0;
+                bool out_of_range = false;
+                if (!parseObjNumber(tokens[t], value, out_of_range)) {
+                    const std::string word(tokens[t].substr(tokens[t][0] == '+' || tokens[t][0] == '-' ? 1 : 0));
+                    std::string lower;
+                    for (char c : word) lower += static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+                    if (lower.rfind("nan", 0) == 0 || lower.rfind("inf", 0) == 0)
+                        failAt(kKinds[kind], " ", number, " has a NaN or infinite coordinate ", quoteObjToken(tokens[t]));
+                    failAt(kKinds[kind], " ", number, ": ", quoteObjToken(tokens[t]), " is not a number");
+                }
+                if (out_of_range || std::abs(value) > double(FLT_MAX))
+                    failAt(kKinds[kind], " ", number, " has a NaN or infinite coordinate: ", quoteObjToken(tokens[t]),
+                           " is beyond float range");
+            }
+            ++defined[kind];
+        } else if (keyword == "f") {
+            if (tokens.size() - 1 > 255) failAt("a face of ", tokens.size() - 1, " corners (at most 255)");
+            for (size_t t = 1; t < tokens.size(); ++t) {
+                // v, v/vt, v//vn or v/vt/vn
+                const std::string_view corner = tokens[t];
+                std::string_view parts[3];
+                size_t part_count = 0, start = 0;
+                for (size_t i = 0; i <= corner.size(); ++i) {
+                    if (i < corner.size() && corner[i] != '/') continue;
+                    if (part_count == 3) failAt("face corner ", quoteObjToken(corner), " has more than 3 indices");
+                    parts[part_count++] = corner.substr(start, i - start);
+                    start = i + 1;
+                }
+                for (size_t k = 0; k < part_count; ++k) {
+                    if (parts[k].empty() && k > 0 && !(k == 1 && part_count == 3)) {
+                        failAt("face corner ", quoteObjToken(corner), " has an empty ", kKinds[k], " index");
+                    }
+                    if (parts[k].empty() && k > 0) continue;  // v//vn
+                    long long index = 0;
+                    bool overflow = false;
+                    if (!parseObjIndex(parts[k], index, overflow))
+                        failAt("face corner ", quoteObjToken(corner), ": ", quoteObjToken(parts[k]), " is not a ",
+                               kKinds[k], " index");
+                    if (overflow)
+                        failAt("face corner ", quoteObjToken(corner), ": ", kKinds[k], " index ",
+                               quoteObjToken(parts[k]), " overflows int");
+                    if (index == 0)
+                        failAt("face corner ", quoteObjToken(corner), ": ", kKinds[k], " index 0 (OBJ indices start at 1)");
+                    if (index > 0 && static_cast<size_t>(index) > totals[k])
+                        failAt("face uses ", kKinds[k], " ", index, " but the file has ", totals[k], " ", kKindsPlural[k]);
+                    if (index < 0 && static_cast<size_t>(-index) > defined[k])
+                        failAt("face corner ", quoteObjToken(corner), ": relative ", kKinds[k], " index ", index,
+                               " reaches before the first (", defined[k], " defined so far)");
+                }
+            }
+        } else if (keyword != "o" && keyword != "g") {
+            out += '\n';  // ignored statement, comment or blank line
+            continue;
+        }
+        out.append(lines[l].data(), lines[l].size());
+        out += '\n';
+    }
+    return out;
+}
+
 inline std::string trimTrailingSpace(std::string text) {
     while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' '))
         text.pop_back();
@@ -135,24 +350,18 @@ inline std::string fileStem(const std::string& path) {
     return name.empty() ? std::string("obj") : name;
 }
 
-}  // namespace detail
-
-inline Scene loadObj(const std::string& path, const ObjOptions& options) {
-    const std::string where = "penumbra::scene::loadObj('" + path + "'): ";
-    {
-        std::ifstream probe(path);
-        PENUMBRA_CHECK(probe.is_open(), where, "cannot open file");
-    }
+inline Scene loadObjText(const std::string& text, const std::string& where, const std::string& stem,
+                         const ObjOptions& options) {
+    std::istringstream stream(validateObjText(text, where));
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
     std::string warnings, errors;
-    const size_t slash = path.find_last_of("/\\");
-    const std::string directory = slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
-    // triangulate = false: we triangulate ourselves so winding (hence closedness) is preserved
-    // whichever triangulator the installed tinyobjloader was built with.
-    const bool parsed = tinyobj::LoadObj(&attrib, &shapes, &materials, &warnings, &errors, path.c_str(),
-                                         directory.c_str(), /*triangulate=*/false);
+    // No material reader: materials are ignored, and parsing touches no file. triangulate =
+    // false: we triangulate ourselves so winding (hence closedness) is preserved whichever
+    // triangulator the installed tinyobjloader was built with.
+    const bool parsed = tinyobj::LoadObj(&attrib, &shapes, &materials, &warnings, &errors, &stream,
+                                         /*readMatFn=*/nullptr, /*triangulate=*/false);
     PENUMBRA_CHECK(parsed, where, "parse error: ", detail::trimTrailingSpace(errors));
 
     const size_t vertex_count = attrib.vertices.size() / 3;
@@ -215,7 +424,7 @@ inline Scene loadObj(const std::string& path, const ObjOptions& options) {
     for (const auto& triangle : triangles)
         for (uint32_t v : triangle) remap[v] = 0;
     Mesh mesh;
-    mesh.name = detail::fileStem(path);
+    mesh.name = stem;
     for (size_t v = 0; v < vertex_count; ++v) {
         if (remap[v] == kUnused) continue;
         const glm::vec3 p = filePosition(v);
@@ -293,6 +502,22 @@ inline Scene loadObj(const std::string& path, const ObjOptions& options) {
         ground_y = 0.0f;
     }
     return sceneFromMesh(std::move(mesh), ground_y, options.ground);
+}
+
+}  // namespace detail
+
+inline Scene loadObj(const std::string& path, const ObjOptions& options) {
+    const std::string where = "penumbra::scene::loadObj('" + path + "'): ";
+    std::ifstream file(path, std::ios::binary);
+    PENUMBRA_CHECK(file.is_open(), where, "cannot open file");
+    std::ostringstream text;
+    text << file.rdbuf();
+    PENUMBRA_CHECK(!file.bad(), where, "cannot read file");
+    return detail::loadObjText(text.str(), where, detail::fileStem(path), options);
+}
+
+inline Scene parseObj(const std::string& text, const std::string& name, const ObjOptions& options) {
+    return detail::loadObjText(text, "penumbra::scene::parseObj('" + name + "'): ", detail::fileStem(name), options);
 }
 
 inline Scene load(const std::string& spec) {

@@ -1,4 +1,6 @@
 // penumbra::scene image helpers — an RGB8 image, linear float -> sRGB8, and PNG writing.
+// Part of penumbra::support (support/include/; a core install has none of it, see CMakeLists.txt:
+// PENUMBRA_BUILD_SUPPORT). CMake target penumbra::support links tinyobjloader and stb.
 //
 // Integration: needs stb_image_write.h (Debian/Ubuntu: libstb-dev). The stb functions must be
 // compiled once per program, one of two ways:
