@@ -259,7 +259,7 @@ struct CoverageStats {
     uint64_t nonfinite_with_fragments = 0, record_mismatches = 0;
     // Fixed-6 two-pass plan: triangles the CPU predicate says the direct pass spills, what the GPU's
     // spill header reports (count / 3 + overflow), and overflows; hulls over 6 vertices outside it.
-    uint64_t spill_predicted = 0, spill_gpu = 0, spill_overflow = 0, direct_over_six = 0;
+    uint64_t spill_predicted = 0, spill_gpu = 0, spill_overflow = 0, direct_over_six = 0, twin_spill_disagreements = 0;
     bool two_pass = false;
     uint64_t kinds[6] = {};
     uint64_t category_triangles[kCategoryCount] = {}, category_extra[kCategoryCount] = {},
@@ -274,7 +274,7 @@ struct CoverageStats {
         present_but_unpredicted += o.present_but_unpredicted, uncertain += o.uncertain;
         nonfinite_with_fragments += o.nonfinite_with_fragments, record_mismatches += o.record_mismatches;
         spill_predicted += o.spill_predicted, spill_gpu += o.spill_gpu, spill_overflow += o.spill_overflow;
-        direct_over_six += o.direct_over_six;
+        direct_over_six += o.direct_over_six, twin_spill_disagreements += o.twin_spill_disagreements;
         two_pass = two_pass || o.two_pass;
         for (int i = 0; i < 6; ++i) kinds[i] += o.kinds[i];
         for (int i = 0; i < kCategoryCount; ++i) {
@@ -370,7 +370,7 @@ void checkTriangle(const ConservativeRasterSetup& setup, const glm::vec4 (&clip)
     if (setup.spill.enabled && (hull.spilled != needs_spill) && stats.failures.size() < 8) {
         stats.failures.push_back("twin's hull.spilled disagrees with conservativeNeedsSpill: " + describeClip(clip));
     }
-    if (setup.spill.enabled) stats.direct_over_six += hull.spilled != needs_spill;
+    if (setup.spill.enabled) stats.twin_spill_disagreements += hull.spilled != needs_spill;
     // What the direct pass emits must fit its declared 6 vertices.
     if (setup.options.variant == ConservativeVariant::Fixed6 && !needs_spill && hull.count > kConservativeFixed6MaxVertices) {
         stats.direct_over_six++;
@@ -602,6 +602,7 @@ void requireClean(const CoverageStats& s, bool expect_prediction = true) {
     CHECK(s.outside == 0);
     CHECK(s.kinds[static_cast<int>(ConservativeHullKind::Fallback)] == 0);
     CHECK(s.direct_over_six == 0);
+    CHECK(s.twin_spill_disagreements == 0);
     if (s.two_pass) {
         // Every triangle the CPU predicate spills, and no other, went through the spill buffer.
         CHECK(s.spill_gpu == s.spill_predicted);
@@ -652,6 +653,32 @@ TEST_CASE("cpu: setup validates every option and names the bad value") {
     bad([](auto& b) { b.variant = static_cast<ConservativeVariant>(7); }, "variant = 7");
     bad([](auto& b) { b.depth_clip_range = glm::vec2(0, 0); }, "depth_clip_range = (0, 0)");
     bad([](auto& b) { b.depth_clip_range = glm::vec2(-2, 1); }, "depth_clip_range = (-2, 1)");
+    bad([](auto& b) { b.spill_capacity = penumbra::kConservativeMaxSpillCapacity + 1; }, "spill_capacity = 16777217");
+    bad([](auto& b) { b.max_triangles = 1u << 30; }, "max_triangles = 1073741824");
+    {
+        // The Fixed-6 plan: sized from max_triangles (never overflows), else spill_capacity, else the default.
+        ConservativeRasterOptions f = o;
+        CHECK(penumbra::conservativeRasterSetup(f).spill.capacity == penumbra::kConservativeDefaultSpillCapacity);
+        f.max_triangles = 5000;
+        const ConservativeRasterSetup fs = penumbra::conservativeRasterSetup(f);
+        CHECK(fs.spill.enabled);
+        CHECK(fs.spill.capacity == 5000u);
+        CHECK(fs.spill.buffer_bytes == 32u + 64u * 5000u);
+        CHECK(fs.spill.triangles_offset == 32u);
+        CHECK(fs.spill.indirect_offset == 0u);
+        CHECK(fs.spill.reset.count == 0u);
+        CHECK(fs.spill.reset.instance_count == 1u);
+        CHECK(fs.spill.reset.capacity == 5000u);
+        CHECK(fs.spill.reset.overflow == 0u);
+        CHECK(fs.spill.direct_max_vertices == 6);
+        CHECK(fs.spill.spill_max_vertices == PENUMBRA_CONSERVATIVE_MAX_VERTICES);
+        CHECK(fs.spill.direct_defines.back().name == "PENUMBRA_CONSERVATIVE_DIRECT");
+        CHECK(fs.spill.spill_defines.back().name == "PENUMBRA_CONSERVATIVE_SPILL_DRAW");
+        f.spill_capacity = 100;
+        CHECK(penumbra::conservativeRasterSetup(f).spill.capacity == 100u);
+        f.variant = ConservativeVariant::Exact;
+        CHECK_FALSE(penumbra::conservativeRasterSetup(f).spill.enabled);
+    }
 
     o.variant = ConservativeVariant::Exact;
     o.drop_degenerate = true;
@@ -791,6 +818,11 @@ TEST_CASE("cpu: the twin's hull covers every required pixel; fixed6 contains exa
                 CHECK(hull_fixed.count == 0);
             }
             if (hull_fixed.kind == ConservativeHullKind::Triangle) CHECK(hull_fixed.count == 6);
+            // The two-pass plan: what the direct pass emits fits its 6; the rest is spilled.
+            const bool needs_spill = penumbra::conservativeNeedsSpill(t.v[0], t.v[1], t.v[2], fixed);
+            CHECK(hull_fixed.spilled == needs_spill);
+            if (!needs_spill) CHECK(hull_fixed.count <= kConservativeFixed6MaxVertices);
+            if (needs_spill) CHECK(hull_fixed.kind != ConservativeHullKind::Triangle);
             if (hull_exact.kind == ConservativeHullKind::Triangle) CHECK(hull_exact.count <= 7);
             if (hull_exact.kind == ConservativeHullKind::Thin) CHECK(hull_exact.count <= 6);
             CHECK(hull_exact.count <= PENUMBRA_CONSERVATIVE_MAX_VERTICES);
@@ -1060,9 +1092,8 @@ TEST_CASE("gl: a full spill buffer counts its overflow and keeps the indirect co
     CHECK(rec.spill.first == 0u);
     CHECK(rec.spill.capacity == capacity);
     CHECK(rec.spill.overflow == predicted - capacity);
-    // The triangles that did fit were drawn: exactly `capacity` spilled triangles have fragments
-    // whenever every spilled triangle has some required pixel... so just check that the stored
-    // ones are complete and the direct ones unaffected: triangles not spilled miss nothing.
+    // Which spilled triangles found room is up to the GPU's ordering; the direct pass's own
+    // triangles are unaffected by the overflow: they miss nothing.
     CoverageStats direct;
     for (size_t i = 0; i < triangles.size(); ++i) {
         const glm::vec4 clip[3] = {rec.clips[3 * i], rec.clips[3 * i + 1], rec.clips[3 * i + 2]};
