@@ -20,6 +20,7 @@
 #include "bench_common.hpp"
 
 #include <penumbra/conservative_raster.hpp>
+#include <penumbra/gl/conservative_raster.hpp>
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
 
@@ -106,28 +107,24 @@ struct Frame {
 
     // The per-frame work: (plan) reset the header, direct draw, barrier, indirect spill draw.
     void draw() {
-        if (mode == Mode::Fixed6) {
-            glNamedBufferSubData(spill_buffer.id(), 0, sizeof setup->spill.reset, &setup->spill.reset);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_CONSERVATIVE_SPILL_BINDING, spill_buffer.id());
-        }
+        const penumbra::BufferRange range{spill_buffer.id(), 0, setup->spill.buffer_bytes};
+        if (mode == Mode::Fixed6) penumbra::gl::beginConservativeSpill(*setup, range);
         direct.use();
         glUniform1ui(8, 0u);
         glBindVertexArray(vao);
         glDrawArrays(GL_TRIANGLES, 0, vertex_count);
         if (mode == Mode::Fixed6) {
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
             spill.use();
             glBindVertexArray(empty_vao);
-            glBindBuffer(GL_DRAW_INDIRECT_BUFFER, spill_buffer.id());
-            glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(static_cast<uintptr_t>(setup->spill.indirect_offset)));
+            penumbra::gl::drawConservativeSpill(*setup, range);
         }
     }
 
     /// Triangles the last frame spilled (read back: outside timed regions only).
     double spilled() const {
         if (mode != Mode::Fixed6) return 0;
-        penumbra::ConservativeSpillHeader header{};
-        glGetNamedBufferSubData(spill_buffer.id(), 0, sizeof header, &header);
+        const penumbra::ConservativeSpillHeader header =
+            penumbra::gl::readConservativeSpillHeader({spill_buffer.id(), 0, setup->spill.buffer_bytes});
         return static_cast<double>(header.count / 3u + header.overflow);
     }
 };

@@ -9,6 +9,7 @@
 // the ground truth is computed from the clip coordinates the geometry stage itself recorded.
 // Seeds are printed; PENUMBRA_SEED=<n> replays one. The `stress` suite runs 10^6 per variant.
 #include <penumbra/conservative_raster.hpp>
+#include <penumbra/gl/conservative_raster.hpp>
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
 #include <penumbra/shader_source.hpp>
@@ -497,13 +498,21 @@ Recorded record(const ConservativeRasterSetup& setup, glm::ivec2 fb_size, const 
     words.fill(0u);              // the recorder ORs and adds into it
     clips.fill(0xffffffffu);     // poison: every triangle's record must be overwritten
     penumbra::gl::Buffer params(sizeof(setup.params), &setup.params);
-    // The plan's spill buffer, sized by the setup (every triangle of this draw fits: max_triangles).
-    penumbra::ConservativeSpillHeader reset = setup.spill.reset;
-    if (spill_capacity) reset.capacity = spill_capacity;
-    const uint64_t spill_bytes = out.two_pass ? setup.spill.triangles_offset + uint64_t(reset.capacity) * setup.spill.triangle_bytes : 64;
-    penumbra::gl::Buffer spill(static_cast<size_t>(spill_bytes));
-    spill.fill(0xffffffffu);  // poison the triangle array
-    if (out.two_pass) glNamedBufferSubData(spill.id(), 0, sizeof reset, &reset);
+    // The plan's spill buffer, sized by the setup (every triangle of this draw fits: max_triangles),
+    // at a non-zero offset inside a larger buffer, as an engine's sub-allocation would be.
+    ConservativeRasterSetup plan = setup;
+    if (spill_capacity) {
+        plan.spill.capacity = plan.spill.reset.capacity = spill_capacity;
+        plan.spill.buffer_bytes = plan.spill.triangles_offset + uint64_t(spill_capacity) * plan.spill.triangle_bytes;
+    }
+    const uint64_t spill_offset = 256;
+    penumbra::gl::Buffer spill(static_cast<size_t>(spill_offset + (out.two_pass ? plan.spill.buffer_bytes : 64) + 64));
+    spill.fill(0xffffffffu);  // poison the header and the triangle array
+    const penumbra::BufferRange spill_range{spill.id(), spill_offset, out.two_pass ? plan.spill.buffer_bytes : 0};
+    if (out.two_pass) {
+        penumbra::gl::validateConservativeSpill(plan, spill_range);
+        REQUIRE(penumbra::gl::beginConservativeSpill(plan, spill_range) == penumbra::Status::Ok);
+    }
 
     GLuint vao = 0, empty_vao = 0, fbo = 0;
     glCreateVertexArrays(1, &vao);
@@ -530,21 +539,18 @@ Recorded record(const ConservativeRasterSetup& setup, glm::ivec2 fb_size, const 
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_CONSERVATIVE_RECORD_WORDS_BINDING, words.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_CONSERVATIVE_RECORD_TILES_BINDING, tile_buffer.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_CONSERVATIVE_RECORD_CLIP_BINDING, clips.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_CONSERVATIVE_SPILL_BINDING, spill.id());
     glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * n));
     if (out.two_pass) {
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
         penumbra::gl::Program& q = program(setup.spill.spill_defines, false);
         q.use();
         glBindVertexArray(empty_vao);
-        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, spill.id());
-        glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(static_cast<uintptr_t>(setup.spill.indirect_offset)));
+        REQUIRE(penumbra::gl::drawConservativeSpill(plan, spill_range) == penumbra::Status::Ok);
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     out.words = words.download<uint32_t>();
     out.clips = clips.download<glm::vec4>();
-    if (out.two_pass) glGetNamedBufferSubData(spill.id(), 0, sizeof out.spill, &out.spill);
+    if (out.two_pass) out.spill = penumbra::gl::readConservativeSpillHeader(spill_range);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glBindVertexArray(0);
     glDeleteFramebuffers(1, &fbo);
@@ -1101,6 +1107,25 @@ TEST_CASE("gl: a full spill buffer counts its overflow and keeps the indirect co
         checkTriangle(setup, clip, &rec.words[i * kWords], tiles[i], triangles[i].category, direct);
     }
     requireClean(direct);
+}
+
+TEST_CASE("gl: the spill helpers validate at load time and return a Status per frame") {
+    context();
+    const auto fixed = makeSetup(0, 0, 32, 32, ConservativeVariant::Fixed6, subpixelBits(), false, false, 100);
+    const auto exact = makeSetup(0, 0, 32, 32, ConservativeVariant::Exact, subpixelBits());
+    penumbra::gl::Buffer buffer(static_cast<size_t>(fixed.spill.buffer_bytes));
+    const penumbra::BufferRange whole{buffer.id(), 0, fixed.spill.buffer_bytes};
+    CHECK_NOTHROW(penumbra::gl::validateConservativeSpill(fixed, whole));
+    CHECK(contains(errorOf([&] { penumbra::gl::validateConservativeSpill(exact, whole); }), "no spill plan"));
+    CHECK(contains(errorOf([&] { penumbra::gl::validateConservativeSpill(fixed, whole.sub(0, 64)); }), "needs"));
+    CHECK(contains(errorOf([&] { penumbra::gl::validateConservativeSpill(fixed, {buffer.id(), 4, fixed.spill.buffer_bytes}); }),
+                   "not a multiple"));
+#ifdef NDEBUG  // misuse asserts in debug builds; in release it returns a Status and issues no GL call
+    CHECK(penumbra::gl::beginConservativeSpill(exact, whole) == penumbra::Status::InvalidArgument);
+    CHECK(penumbra::gl::beginConservativeSpill(fixed, whole.sub(0, 64)) == penumbra::Status::RangeTooSmall);
+    CHECK(penumbra::gl::drawConservativeSpill(fixed, {buffer.id(), 2, fixed.spill.buffer_bytes}) == penumbra::Status::Misaligned);
+#endif
+    penumbra::gl::checkErrors("spill helpers");
 }
 
 TEST_CASE("gl: NaN/Inf and degenerate triangles; drop_degenerate permutation") {
