@@ -12,6 +12,10 @@
 //             gl_Position and your flat outputs, EmitVertex()); fragment snippet
 //             conservative_raster_clip.glsl with penumbraConservativeInsideBox(gl_FragCoord.xy, box);
 //             ready entries conservative_raster.{vert,geom,frag}.glsl to copy;
+//             the Fixed-6 two-pass plan ConservativeRasterSetup::spill (below), with the spill
+//             predicate penumbraConservativeNeedsSpill / conservativeNeedsSpill() and the snippet
+//             conservative_raster_spill.glsl; GL helpers that record it in
+//             penumbra/gl/conservative_raster.hpp;
 //             CPU twins: conservativeHull() (the same emitted polygon, float, same operations),
 //             rasterizeConservativeHull() (GL's pixel-centre rule on it: the GPU's fragments),
 //             and the ground truth: conservativeReferencePolygon() + polygonTouchesPixel() (an exact
@@ -34,6 +38,15 @@
 //   * an unclipped triangle (all vertices inside the near plane and the guard band): Fixed6 emits
 //     the seed's 6 vertices / 4 triangles (a case-iii corner over-covers by at most one pixel);
 //     Exact emits the exact dilation (at most 7 vertices);
+//   * Fixed6 programs: the direct pass (PENUMBRA_CONSERVATIVE_DIRECT=1) declares max_vertices = 6
+//     (sintorn2008 §3.2; declared GS output size sets GS throughput on real GPUs) and emits every
+//     unclipped triangle; each triangle that needs clipping (conservativeNeedsSpill: it crosses the
+//     near plane, w = min_w or the guard band and is not entirely outside one of them) is appended
+//     to a spill buffer (ConservativeSpillPlan: capacity fixed at setup, overflow counted) and a
+//     second program draws that buffer with one glDrawArraysIndirect whose command is the spill
+//     header itself. Together the two passes emit exactly the single pass's hulls. Exact keeps one
+//     pass at max_vertices 13 (its unclipped hull alone needs 7); the single pass (`defines`,
+//     13) also stays available for geometry stages without a spill hook;
 //   * a triangle crossing the near plane or the guard band (G pixels around the viewport): it is
 //     clipped in double precision in clip space and the resulting n-gon (n <= 9) is emitted as its
 //     exact dilation (n + 4 <= 13 vertices) in both variants — the fixed-6 trick is for triangles;
@@ -366,6 +379,16 @@ inline double conservativePlane(int i, const glm::dvec4& c, const shared::Penumb
     return ((i & 1) == 0 ? coordinate : -coordinate) + conservativeMulRounded(g, c.w);
 }
 
+// from + t * (to - from) per component, every product rounded (mirrors the clipper's precise lerp).
+inline glm::dvec4 conservativeLerpFrom(const glm::dvec4& from, double t, const glm::dvec4& to) {
+    glm::dvec4 r;
+    for (int k = 0; k < 4; ++k) r[k] = from[k] + conservativeMulRounded(t, to[k] - from[k]);
+    return r;
+}
+
+// x * x + y * y with both products rounded (mirrors the GLSL's precise squared lengths).
+inline float conservativeLength2(glm::vec2 d) { return conservativeMulRounded(d.x, d.x) + conservativeMulRounded(d.y, d.y); }
+
 // Mirrors penumbraConservativeOutsideOnePlane.
 inline bool conservativeOutsideOnePlane(const glm::vec4 (&clip)[3], const shared::PenumbraConservativeParams& p) {
     const glm::dvec4 a(clip[0]), b(clip[1]), c(clip[2]);
@@ -391,10 +414,10 @@ inline int conservativeClip(const glm::vec4 (&clip)[3], const shared::PenumbraCo
             const glm::dvec4 cur = poly[i];
             const double d_cur = conservativePlane(plane, cur, p);
             if (d_cur >= 0.0) {
-                if (d_prev < 0.0) next[m++] = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                if (d_prev < 0.0) next[m++] = conservativeLerpFrom(cur, d_cur / (d_cur - d_prev), prev);
                 next[m++] = cur;
             } else if (d_prev >= 0.0) {
-                next[m++] = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                next[m++] = conservativeLerpFrom(prev, d_prev / (d_prev - d_cur), cur);
             }
             prev = cur;
             d_prev = d_cur;
@@ -405,7 +428,8 @@ inline int conservativeClip(const glm::vec4 (&clip)[3], const shared::PenumbraCo
     }
     const glm::dvec2 half_size = glm::dvec2(p.viewport.z, p.viewport.w) * 0.5;
     for (int i = 0; i < n; ++i) {
-        polygon[i] = glm::vec2(glm::dvec2(poly[i].x, poly[i].y) / poly[i].w * half_size + half_size);
+        polygon[i] = glm::vec2(static_cast<float>(conservativeMulRounded(poly[i].x / poly[i].w, half_size.x) + half_size.x),
+                               static_cast<float>(conservativeMulRounded(poly[i].y / poly[i].w, half_size.y) + half_size.y));
         depth[i] = static_cast<float>(poly[i].z / poly[i].w);
     }
     return n;
@@ -444,8 +468,10 @@ inline int conservativeFixedHull(const glm::vec2* polygon, float h, glm::vec2* h
         glm::vec2 a = q + h * conservativeCorner(k_in);
         glm::vec2 b = q + h * conservativeCorner(k_out);
         if (steps == 2) {  // case iii: extend both edges by one pixel (2h) past the corner
-            a += (2.0f * h) * (d_in / std::sqrt(glm::dot(d_in, d_in)));
-            b -= (2.0f * h) * (d_out / std::sqrt(glm::dot(d_out, d_out)));
+            const glm::vec2 n_in = d_in / std::sqrt(conservativeLength2(d_in));
+            const glm::vec2 n_out = d_out / std::sqrt(conservativeLength2(d_out));
+            a = glm::vec2(a.x + conservativeMulRounded(2.0f * h, n_in.x), a.y + conservativeMulRounded(2.0f * h, n_in.y));
+            b = glm::vec2(b.x - conservativeMulRounded(2.0f * h, n_out.x), b.y - conservativeMulRounded(2.0f * h, n_out.y));
         }
         hull[2 * i] = a;
         hull[2 * i + 1] = b;
@@ -504,7 +530,7 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
     for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
             const glm::vec2 d = polygon[j] - polygon[i];
-            const float d2 = glm::dot(d, d);
+            const float d2 = detail::conservativeLength2(d);
             if (d2 > diameter2) {
                 diameter2 = d2;
                 far_a = i;
@@ -531,12 +557,14 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
             const glm::vec3 a(polygon[i] - origin, depth[i]);
             const int j = i + 1 < n ? i + 1 : 0;
             const glm::vec3 b(polygon[j] - origin, depth[j]);
-            normal += glm::vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+            using detail::conservativeMulRounded;
+            normal += glm::vec3(conservativeMulRounded(a.y - b.y, a.z + b.z), conservativeMulRounded(a.z - b.z, a.x + b.x),
+                                conservativeMulRounded(a.x - b.x, a.y + b.y));
             mean += a;
         }
         mean /= static_cast<float>(n);
         gradient = -glm::vec2(normal.x, normal.y) / normal.z;
-        z0 = mean.z - glm::dot(gradient, glm::vec2(mean.x, mean.y));
+        z0 = mean.z - (detail::conservativeMulRounded(gradient.x, mean.x) + detail::conservativeMulRounded(gradient.y, mean.y));
     }
 
     if (thin) {
@@ -590,7 +618,9 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
     for (int j = 0; j < count; ++j) {
         const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
         const glm::vec2 q = out.pixels[static_cast<size_t>(index)];
-        const float z = std::clamp(z0 + glm::dot(gradient, q - origin), params.depth.x, params.depth.y);
+        const glm::vec2 dq = q - origin;
+        const float z = std::clamp(z0 + (detail::conservativeMulRounded(gradient.x, dq.x) + detail::conservativeMulRounded(gradient.y, dq.y)),
+                                   params.depth.x, params.depth.y);
         out.positions[static_cast<size_t>(j)] = glm::vec4(q / half_size - 1.0f, z, 1.0f);
     }
     return out;

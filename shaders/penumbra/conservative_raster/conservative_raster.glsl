@@ -195,10 +195,14 @@ int penumbraConservativeClip(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativePara
             dvec4 cur = poly[i];
             double d_cur = penumbraConservativePlane(plane, cur, params);
             if (d_cur >= 0.0) {
-                if (d_prev < 0.0) next[m++] = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                if (d_prev < 0.0) {
+                    precise dvec4 x = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                    next[m++] = x;
+                }
                 next[m++] = cur;
             } else if (d_prev >= 0.0) {
-                next[m++] = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                precise dvec4 x = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                next[m++] = x;
             }
             prev = cur;
             d_prev = d_cur;
@@ -208,7 +212,8 @@ int penumbraConservativeClip(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativePara
     }
     dvec2 half_size = dvec2(params.viewport.zw) * 0.5;
     for (int i = 0; i < n; ++i) {
-        penumbraConservativePolygon[i] = vec2(poly[i].xy / poly[i].w * half_size + half_size);
+        precise dvec2 q = poly[i].xy / poly[i].w * half_size + half_size;
+        penumbraConservativePolygon[i] = vec2(q);
         penumbraConservativeDepth[i] = float(poly[i].z / poly[i].w);
     }
     return n;
@@ -256,11 +261,13 @@ int penumbraConservativeFixedHull(float h) {
         int k_out = penumbraConservativeEdgeCorner(d_out);
         int steps = (k_out - k_in) & 3;
         if (steps == 3) return -1;
-        vec2 a = p + h * penumbraConservativeCorner(k_in);
-        vec2 b = p + h * penumbraConservativeCorner(k_out);
+        precise vec2 a = p + h * penumbraConservativeCorner(k_in);
+        precise vec2 b = p + h * penumbraConservativeCorner(k_out);
         if (steps == 2) {  // case iii: extend both edges by one pixel (2h) past the corner
-            a += (2.0 * h) * normalize(d_in);
-            b -= (2.0 * h) * normalize(d_out);
+            precise vec2 n_in = d_in / sqrt(d_in.x * d_in.x + d_in.y * d_in.y);
+            precise vec2 n_out = d_out / sqrt(d_out.x * d_out.x + d_out.y * d_out.y);
+            a += (2.0 * h) * n_in;
+            b -= (2.0 * h) * n_out;
         }
         penumbraConservativeHull[2 * i] = a;
         penumbraConservativeHull[2 * i + 1] = b;
@@ -311,7 +318,7 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
             vec2 d = penumbraConservativePolygon[j] - penumbraConservativePolygon[i];
-            float d2 = dot(d, d);
+            precise float d2 = d.x * d.x + d.y * d.y;
             if (d2 > diameter2) {
                 diameter2 = d2;
                 far_a = i;
@@ -327,13 +334,13 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
 #endif
 
     // 3. Depth plane z(p) = z0 + dot(gradient, p - origin) from Newell's normal; thin: nearest z.
-    float z0 = penumbraConservativeDepth[0];
-    vec2 gradient = vec2(0.0);
+    precise float z0 = penumbraConservativeDepth[0];
+    precise vec2 gradient = vec2(0.0);
     if (thin) {
         for (int i = 1; i < n; ++i) z0 = min(z0, penumbraConservativeDepth[i]);
     } else {
-        vec3 normal = vec3(0.0);
-        vec3 mean = vec3(0.0);
+        precise vec3 normal = vec3(0.0);
+        precise vec3 mean = vec3(0.0);
         for (int i = 0; i < n; ++i) {
             vec3 a = vec3(penumbraConservativePolygon[i] - origin, penumbraConservativeDepth[i]);
             int j = i + 1 < n ? i + 1 : 0;
@@ -343,7 +350,7 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
         }
         mean /= float(n);
         gradient = -normal.xy / normal.z;
-        z0 = mean.z - dot(gradient, mean.xy);
+        z0 = mean.z - (gradient.x * mean.x + gradient.y * mean.y);
     }
 
     // 4. Thin polygons become the segment between their farthest points, dilated by h + thickness.
@@ -400,7 +407,8 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     for (int j = 0; j < count; ++j) {
         int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
         vec2 p = penumbraConservativeHull[index];
-        float z = clamp(z0 + dot(gradient, p - origin), params.depth.x, params.depth.y);
+        vec2 dq = p - origin;
+        precise float z = clamp(z0 + (gradient.x * dq.x + gradient.y * dq.y), params.depth.x, params.depth.y);
         PENUMBRA_CONSERVATIVE_EMIT_VERTEX(vec4(p / half_size - 1.0, z, 1.0), box);
     }
     EndPrimitive();
