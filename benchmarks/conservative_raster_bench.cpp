@@ -11,8 +11,10 @@
 //   err_missed        pixels the contract requires that got no fragment (must be 0 for fixed6/exact;
 //                     the plain baseline shows why conservative raster is needed),
 //   err_overcoverage  extra fragments (not required, or duplicates) / required pixels,
+//   err_overcoverage_per_triangle  the same extra fragments / triangles,
 //   err_spill_mismatch |triangles the GPU spilled - triangles conservativeNeedsSpill() predicts|,
-//   spill_fraction    triangles through the spill pass / triangles (plan; GPU header count),
+//   spill_fraction    triangles through the spill pass / triangles (plan: the GPU header's count;
+//                     0 for the single-pass modes, which have no spill pass),
 //   gs_max_vertices   what the (direct) geometry stage declares,
 //   time_vs_single_pass (plan only) this entry's time / the single pass's, both timed here,
 //   fragments_per_triangle, vertices_per_triangle (what the geometry stages emit, CPU twin),
@@ -242,6 +244,7 @@ void BM_ConservativeRaster(benchmark::State& state, Mode mode, double near_fract
     state.counters["fragments_per_triangle"] = errors.fragments / n;
     state.counters["vertices_per_triangle"] = errors.vertices / n;
     state.counters["err_overcoverage"] = errors.extra / std::max(errors.required, 1.0);
+    state.counters["err_overcoverage_per_triangle"] = errors.extra / n;
     state.counters["err_missed"] = errors.missed;
     state.counters["err_spill_mismatch"] = std::abs(errors.spilled - (mode == Mode::Fixed6 ? errors.spill_predicted : 0.0));
     state.counters["spill_fraction"] = errors.spilled / n;

@@ -9,6 +9,9 @@
 #if defined(PENUMBRA_SHADER_SOURCE_HPP)
 #error penumbra/conservative_raster.hpp pulled in the shader assembler (regex, filesystem)
 #endif
+#if defined(__GLIBCXX__) && (defined(_GLIBCXX_REGEX) || defined(_GLIBCXX_FILESYSTEM))
+#error penumbra/conservative_raster.hpp pulled in <regex> or <filesystem>
+#endif
 
 #include <doctest/doctest.h>
 

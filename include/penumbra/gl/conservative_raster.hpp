@@ -3,7 +3,8 @@
 // are spilled by the direct pass and drawn by an indirect spill pass).
 //
 // Integration summary
-//   needs:    a ConservativeRasterSetup with spill.enabled (Fixed6), a buffer range of at least
+//   needs:    GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS >= 1 (checked by validateConservativeSpill);
+//             a ConservativeRasterSetup with spill.enabled (Fixed6), a buffer range of at least
 //             setup.spill.buffer_bytes you own (validate it once with validateConservativeSpill),
 //             your two programs (direct: setup.spill.direct_defines, spill: setup.spill.spill_defines)
 //             and the params block bound at your params binding.
@@ -55,6 +56,12 @@ inline Status conservativeSpillStatus(const ConservativeRasterSetup& setup, cons
 inline void validateConservativeSpill(const ConservativeRasterSetup& setup, const BufferRange& spill) {
     PENUMBRA_CHECK(setup.spill.enabled, "penumbra::validateConservativeSpill: the setup has no spill plan (variant ",
                    conservativeVariantName(setup.options.variant), "; only fixed6 has one)");
+    // The direct pass appends from the geometry stage: GL 4.3+ only requires 0 geometry-stage
+    // storage blocks (desktop drivers have 8..16; llvmpipe 16).
+    GLint geometry_blocks = 0;
+    glGetIntegerv(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS, &geometry_blocks);
+    PENUMBRA_CHECK(geometry_blocks >= 1, "penumbra::validateConservativeSpill: GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS = ",
+                   geometry_blocks, ": the driver cannot write the spill buffer from the geometry stage");
     GLint alignment = 0;
     glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &alignment);
     validateRange(spill, setup.spill.buffer_bytes, "spill", "validateConservativeSpill",
