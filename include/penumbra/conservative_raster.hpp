@@ -12,6 +12,10 @@
 //             gl_Position and your flat outputs, EmitVertex()); fragment snippet
 //             conservative_raster_clip.glsl with penumbraConservativeInsideBox(gl_FragCoord.xy, box);
 //             ready entries conservative_raster.{vert,geom,frag}.glsl to copy;
+//             the Fixed-6 two-pass plan ConservativeRasterSetup::spill (below), with the spill
+//             predicate penumbraConservativeNeedsSpill / conservativeNeedsSpill() and the snippet
+//             conservative_raster_spill.glsl; GL helpers that record it in
+//             penumbra/gl/conservative_raster.hpp;
 //             CPU twins: conservativeHull() (the same emitted polygon, float, same operations),
 //             rasterizeConservativeHull() (GL's pixel-centre rule on it: the GPU's fragments),
 //             and the ground truth: conservativeReferencePolygon() + polygonTouchesPixel() (an exact
@@ -34,6 +38,15 @@
 //   * an unclipped triangle (all vertices inside the near plane and the guard band): Fixed6 emits
 //     the seed's 6 vertices / 4 triangles (a case-iii corner over-covers by at most one pixel);
 //     Exact emits the exact dilation (at most 7 vertices);
+//   * Fixed6 programs: the direct pass (PENUMBRA_CONSERVATIVE_DIRECT=1) declares max_vertices = 6
+//     (sintorn2008 §3.2; declared GS output size sets GS throughput on real GPUs) and emits every
+//     unclipped triangle; each triangle that needs clipping (conservativeNeedsSpill: it crosses the
+//     near plane, w = min_w or the guard band and is not entirely outside one of them) is appended
+//     to a spill buffer (ConservativeSpillPlan: capacity fixed at setup, overflow counted) and a
+//     second program draws that buffer with one glDrawArraysIndirect whose command is the spill
+//     header itself. Together the two passes emit exactly the single pass's hulls. Exact keeps one
+//     pass at max_vertices 13 (its unclipped hull alone needs 7); the single pass (`defines`,
+//     13) also stays available for geometry stages without a spill hook;
 //   * a triangle crossing the near plane or the guard band (G pixels around the viewport): it is
 //     clipped in double precision in clip space and the resulting n-gon (n <= 9) is emitted as its
 //     exact dilation (n + 4 <= 13 vertices) in both variants — the fixed-6 trick is for triangles;
@@ -49,12 +62,13 @@
 
 #include "penumbra/detail/shared.hpp"
 #include "penumbra/error.hpp"
-#include "penumbra/shader_source.hpp"
+#include "penumbra/shader_defines.hpp"
 
 #include <glm/glm.hpp>
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -78,11 +92,25 @@ using ConservativeRasterParams = shared::PenumbraConservativeParams;
 static_assert(sizeof(ConservativeRasterParams) == 80, "std140 layout the shaders assume: five vec4");
 static_assert(PENUMBRA_CONSERVATIVE_MAX_VERTICES == PENUMBRA_CONSERVATIVE_MAX_POLYGON + 4,
               "the exact dilation of an n-gon has n + 4 vertices");
+static_assert(PENUMBRA_CONSERVATIVE_FIXED6_MAX_VERTICES == 6, "sintorn2008 §3.2: six vertices per triangle");
+using ConservativeSpillHeader = shared::PenumbraConservativeSpillHeader;
+using ConservativeSpillTriangle = shared::PenumbraConservativeSpillTriangle;
+static_assert(sizeof(ConservativeSpillHeader) == 32 && offsetof(ConservativeSpillHeader, capacity) == 16 &&
+                  offsetof(ConservativeSpillHeader, overflow) == 20,
+              "std430 layout the shaders assume; the first 16 bytes are a DrawArraysIndirectCommand");
+static_assert(sizeof(ConservativeSpillTriangle) == 64 && offsetof(ConservativeSpillTriangle, payload) == 48,
+              "std430 layout the shaders assume: three vec4 and a uvec4");
 
 /// Largest viewport side the margins are derived for (GL_MAX_VIEWPORT_DIMS is 16384..32768).
 inline constexpr int kConservativeMaxViewport = 32768;
 inline constexpr int kConservativeMaxVertices = PENUMBRA_CONSERVATIVE_MAX_VERTICES;
 inline constexpr int kConservativeMaxPolygon = PENUMBRA_CONSERVATIVE_MAX_POLYGON;
+/// What the Fixed-6 direct pass's geometry stage declares (sintorn2008 §3.2).
+inline constexpr int kConservativeFixed6MaxVertices = PENUMBRA_CONSERVATIVE_FIXED6_MAX_VERTICES;
+/// Largest spill capacity the setup accepts (triangles; 64 bytes each, 1 GiB), and the capacity
+/// it picks when neither spill_capacity nor max_triangles is given.
+inline constexpr uint32_t kConservativeMaxSpillCapacity = 1u << 24;
+inline constexpr uint32_t kConservativeDefaultSpillCapacity = 1u << 16;
 /// Float error allowance per pixel of coordinate range (16 ulps: the divide, viewport transform and
 /// hull arithmetic each round, GLSL's division is allowed 2.5 ulps).
 inline constexpr float kConservativeFloatSlack = 1.0f / 1048576.0f;  // 2^-20
@@ -119,10 +147,49 @@ struct ConservativeRasterOptions {
     float min_w = 1e-6f;  ///< also kept: w >= min_w (> 0), so nothing at or behind the eye is divided
     glm::vec2 depth_clip_range{-1.0f, 1.0f};  ///< NDC z range GL clips to; (0, 1) under
                                               ///< glClipControl(.., GL_ZERO_TO_ONE). Emitted z is clamped to it
+    /// Fixed6 two-pass plan: the most triangles one direct draw submits (0 = not given). Sizes the
+    /// spill buffer so that it can never overflow, whatever the view.
+    uint32_t max_triangles = 0;
+    /// Fixed6 two-pass plan: triangles the spill buffer holds (0 = max_triangles, or
+    /// kConservativeDefaultSpillCapacity when that is 0 too). Smaller than max_triangles saves
+    /// memory when few triangles need clipping; an overflow loses triangles and is counted in
+    /// the header (ConservativeSpillHeader::overflow).
+    uint32_t spill_capacity = 0;
+};
+
+/// The Fixed-6 two-pass plan (pure data, no GL; an engine records it with its own RHI):
+///   0. before each direct draw, write `reset` (32 bytes) at the start of the spill range;
+///      bind the range (`buffer_bytes` long) as SSBO PENUMBRA_CONSERVATIVE_SPILL_BINDING;
+///   1. direct pass: your triangles through a geometry stage built with `direct_defines`
+///      (penumbra/conservative_raster/conservative_raster.geom.glsl or your own with
+///      PENUMBRA_CONSERVATIVE_DIRECT=1), max_vertices = `direct_max_vertices` (6);
+///   2. glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+///   3. spill pass: a program built with `spill_defines` (max_vertices = `spill_max_vertices`,
+///      13), any vertex array (no attributes are read), GL_DRAW_INDIRECT_BUFFER = the spill buffer,
+///      glDrawArraysIndirect(GL_TRIANGLES, spill offset + `indirect_offset`).
+/// The triangles spilled = header.count / 3 + header.overflow (read back only if you want it);
+/// exactly those for which conservativeNeedsSpill() is true.
+/// Exact variant: `enabled` is false, one pass with `ConservativeRasterSetup::defines` (13).
+struct ConservativeSpillPlan {
+    bool enabled = false;
+    uint32_t capacity = 0;           ///< spilled triangles the buffer holds
+    uint64_t header_bytes = sizeof(ConservativeSpillHeader);      ///< 32
+    uint64_t triangle_bytes = sizeof(ConservativeSpillTriangle);  ///< 64
+    uint64_t triangles_offset = sizeof(ConservativeSpillHeader);  ///< array start (bytes into the range)
+    uint64_t indirect_offset = 0;    ///< DrawArraysIndirectCommand (bytes into the range)
+    uint64_t buffer_bytes = 0;       ///< header + capacity triangles
+    ConservativeSpillHeader reset{};  ///< {0, 1, 0, 0, capacity, 0, 0, 0}
+    ShaderDefines direct_defines;     ///< defines + PENUMBRA_CONSERVATIVE_DIRECT=1
+    ShaderDefines spill_defines;      ///< defines + PENUMBRA_CONSERVATIVE_SPILL_DRAW=1
+    int direct_max_vertices = kConservativeFixed6MaxVertices;
+    int spill_max_vertices = kConservativeMaxVertices;
 };
 
 /// What conservativeRasterSetup derived; pass `params` to the shaders (std140 block) and `defines`
 /// to gl::buildProgram / assembleShader for the geometry and fragment entries or your own.
+/// `defines` alone builds the single-pass emitter (every triangle, max_vertices 13: what a geometry
+/// stage that calls penumbraConservativeEmit without a spill hook declares); Fixed6 draws at 6
+/// output vertices through the two-pass plan `spill`.
 struct ConservativeRasterSetup {
     ConservativeRasterParams params{};
     ShaderDefines defines;
@@ -130,7 +197,9 @@ struct ConservativeRasterSetup {
     float margin = 0.0f;      ///< pixels beyond the half-pixel dilation
     float half_size = 0.0f;   ///< h = 0.5 + margin
     float guard_band = 0.0f;  ///< G in pixels
-    int max_vertices = kConservativeMaxVertices;  ///< the geometry stage's max_vertices
+    /// The single-pass geometry stage's max_vertices (13 for both variants: clipped polygons).
+    int max_vertices = kConservativeMaxVertices;
+    ConservativeSpillPlan spill;  ///< Fixed6: the two-pass plan (direct pass at 6); Exact: disabled
 
     int width() const { return options.viewport_width; }
     int height() const { return options.viewport_height; }
@@ -174,6 +243,12 @@ inline ConservativeRasterSetup conservativeRasterSetup(const ConservativeRasterO
                    o.depth_clip_range.y, ") must satisfy -1 <= min < max <= 1");
     PENUMBRA_CHECK(static_cast<int>(o.variant) == 0 || static_cast<int>(o.variant) == 1,
                    "penumbra: conservativeRasterSetup: variant = ", static_cast<int>(o.variant), " is not a ConservativeVariant");
+    PENUMBRA_CHECK(o.spill_capacity <= kConservativeMaxSpillCapacity, "penumbra: conservativeRasterSetup: spill_capacity = ",
+                   o.spill_capacity, " must be at most ", kConservativeMaxSpillCapacity, " triangles");
+    PENUMBRA_CHECK(o.spill_capacity != 0 || o.max_triangles <= kConservativeMaxSpillCapacity,
+                   "penumbra: conservativeRasterSetup: max_triangles = ", o.max_triangles,
+                   " would size a spill buffer above ", kConservativeMaxSpillCapacity,
+                   " triangles; give a smaller spill_capacity");
 
     ConservativeRasterSetup s;
     s.options = o;
@@ -190,6 +265,19 @@ inline ConservativeRasterSetup conservativeRasterSetup(const ConservativeRasterO
     s.defines = {{"PENUMBRA_CONSERVATIVE_EXACT", o.variant == ConservativeVariant::Exact ? "1" : "0"},
                  {"PENUMBRA_CONSERVATIVE_DROP_DEGENERATE", o.drop_degenerate ? "1" : "0"},
                  {"PENUMBRA_CONSERVATIVE_CLIP_TO_BOX", o.clip_to_box ? "1" : "0"}};
+    if (o.variant == ConservativeVariant::Fixed6) {
+        ConservativeSpillPlan& plan = s.spill;
+        plan.enabled = true;
+        plan.capacity = o.spill_capacity != 0 ? o.spill_capacity
+                        : o.max_triangles != 0 ? o.max_triangles
+                                               : kConservativeDefaultSpillCapacity;
+        plan.buffer_bytes = plan.triangles_offset + static_cast<uint64_t>(plan.capacity) * plan.triangle_bytes;
+        plan.reset = ConservativeSpillHeader{0u, 1u, 0u, 0u, plan.capacity, 0u, 0u, 0u};
+        plan.direct_defines = s.defines;
+        plan.direct_defines.push_back({"PENUMBRA_CONSERVATIVE_DIRECT", "1"});
+        plan.spill_defines = s.defines;
+        plan.spill_defines.push_back({"PENUMBRA_CONSERVATIVE_SPILL_DRAW", "1"});
+    }
     return s;
 }
 
@@ -210,6 +298,9 @@ struct ConservativeHull {
     std::array<glm::vec2, kConservativeMaxVertices> pixels{};     ///< hull, CCW, viewport-relative pixels
     std::array<glm::vec4, kConservativeMaxVertices> positions{};  ///< emitted gl_Position, strip order
     glm::vec4 box{};  ///< window-space (xmin, ymin, xmax, ymax) handed to the fragment stage
+    /// Fixed6 two-pass plan: the direct pass spilled it (conservativeNeedsSpill) and the spill
+    /// pass emitted this hull; false in the single pass (Exact) and for direct-pass hulls.
+    bool spilled = false;
 };
 
 namespace detail {
@@ -234,14 +325,79 @@ inline int conservativeEdgeCorner(glm::vec2 d) {
     return 3;
 }
 
-inline float conservativeCross(glm::vec2 a, glm::vec2 b) { return a.x * b.y - a.y * b.x; }
+/// a * b rounded to float and kept opaque, so the compiler cannot contract it with a following
+/// add into an FMA (GCC contracts across statements with -mfma / -march=native); the GLSL side
+/// uses `precise` for the same reason.
+inline float conservativeMulRounded(float a, float b) {
+    float r = a * b;
+#if defined(__GNUC__) && defined(__x86_64__)
+    __asm__("" : "+x"(r));
+#elif defined(__GNUC__) && defined(__aarch64__)
+    __asm__("" : "+w"(r));
+#endif
+    return r;
+}
 
+inline float conservativeCross(glm::vec2 a, glm::vec2 b) {
+    return conservativeMulRounded(a.x, b.y) - conservativeMulRounded(a.y, b.x);
+}
+
+// Mirrors penumbraConservativeNearDistance: left to right, every product rounded.
+inline float conservativeNearDistance(const glm::vec4& p, const glm::vec4& c) {
+    float d = conservativeMulRounded(p.x, c.x) + conservativeMulRounded(p.y, c.y);
+    d = d + conservativeMulRounded(p.z, c.z);
+    return d + conservativeMulRounded(p.w, c.w);
+}
+
+// Mirrors penumbraConservativeVertexInside.
+inline bool conservativeVertexInside(const glm::vec4& c, const shared::PenumbraConservativeParams& p) {
+    return conservativeNearDistance(p.near_plane, c) >= 0.0f && c.w >= p.clipping.w &&
+           std::abs(c.x) <= p.clipping.y * c.w && std::abs(c.y) <= p.clipping.z * c.w;
+}
+
+inline double conservativeMulRounded(double a, double b) {
+    double r = a * b;
+#if defined(__GNUC__) && defined(__x86_64__)
+    __asm__("" : "+x"(r));
+#elif defined(__GNUC__) && defined(__aarch64__)
+    __asm__("" : "+w"(r));
+#endif
+    return r;
+}
+
+// Mirrors penumbraConservativePlane (left to right, every product rounded).
 inline double conservativePlane(int i, const glm::dvec4& c, const shared::PenumbraConservativeParams& p) {
-    if (i == 0) return glm::dot(glm::dvec4(p.near_plane), c);
+    if (i == 0) {
+        const glm::dvec4 n(p.near_plane);
+        double d = conservativeMulRounded(n.x, c.x) + conservativeMulRounded(n.y, c.y);
+        d = d + conservativeMulRounded(n.z, c.z);
+        return d + conservativeMulRounded(n.w, c.w);
+    }
     if (i == 1) return c.w - static_cast<double>(p.clipping.w);
     const double g = static_cast<double>(i < 4 ? p.clipping.y : p.clipping.z);
     const double coordinate = i < 4 ? c.x : c.y;
-    return ((i & 1) == 0 ? coordinate : -coordinate) + g * c.w;
+    return ((i & 1) == 0 ? coordinate : -coordinate) + conservativeMulRounded(g, c.w);
+}
+
+// from + t * (to - from) per component, every product rounded (mirrors the clipper's precise lerp).
+inline glm::dvec4 conservativeLerpFrom(const glm::dvec4& from, double t, const glm::dvec4& to) {
+    glm::dvec4 r;
+    for (int k = 0; k < 4; ++k) r[k] = from[k] + conservativeMulRounded(t, to[k] - from[k]);
+    return r;
+}
+
+// x * x + y * y with both products rounded (mirrors the GLSL's precise squared lengths).
+inline float conservativeLength2(glm::vec2 d) { return conservativeMulRounded(d.x, d.x) + conservativeMulRounded(d.y, d.y); }
+
+// Mirrors penumbraConservativeOutsideOnePlane.
+inline bool conservativeOutsideOnePlane(const glm::vec4 (&clip)[3], const shared::PenumbraConservativeParams& p) {
+    const glm::dvec4 a(clip[0]), b(clip[1]), c(clip[2]);
+    for (int plane = 0; plane < 6; ++plane) {
+        if (conservativePlane(plane, a, p) < 0.0 && conservativePlane(plane, b, p) < 0.0 && conservativePlane(plane, c, p) < 0.0) {
+            return true;
+        }
+    }
+    return false;
 }
 
 // Mirrors penumbraConservativeClip: Sutherland-Hodgman in double, intersections from the kept end.
@@ -258,10 +414,10 @@ inline int conservativeClip(const glm::vec4 (&clip)[3], const shared::PenumbraCo
             const glm::dvec4 cur = poly[i];
             const double d_cur = conservativePlane(plane, cur, p);
             if (d_cur >= 0.0) {
-                if (d_prev < 0.0) next[m++] = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                if (d_prev < 0.0) next[m++] = conservativeLerpFrom(cur, d_cur / (d_cur - d_prev), prev);
                 next[m++] = cur;
             } else if (d_prev >= 0.0) {
-                next[m++] = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                next[m++] = conservativeLerpFrom(prev, d_prev / (d_prev - d_cur), cur);
             }
             prev = cur;
             d_prev = d_cur;
@@ -272,7 +428,8 @@ inline int conservativeClip(const glm::vec4 (&clip)[3], const shared::PenumbraCo
     }
     const glm::dvec2 half_size = glm::dvec2(p.viewport.z, p.viewport.w) * 0.5;
     for (int i = 0; i < n; ++i) {
-        polygon[i] = glm::vec2(glm::dvec2(poly[i].x, poly[i].y) / poly[i].w * half_size + half_size);
+        polygon[i] = glm::vec2(static_cast<float>(conservativeMulRounded(poly[i].x / poly[i].w, half_size.x) + half_size.x),
+                               static_cast<float>(conservativeMulRounded(poly[i].y / poly[i].w, half_size.y) + half_size.y));
         depth[i] = static_cast<float>(poly[i].z / poly[i].w);
     }
     return n;
@@ -311,8 +468,10 @@ inline int conservativeFixedHull(const glm::vec2* polygon, float h, glm::vec2* h
         glm::vec2 a = q + h * conservativeCorner(k_in);
         glm::vec2 b = q + h * conservativeCorner(k_out);
         if (steps == 2) {  // case iii: extend both edges by one pixel (2h) past the corner
-            a += (2.0f * h) * (d_in / std::sqrt(glm::dot(d_in, d_in)));
-            b -= (2.0f * h) * (d_out / std::sqrt(glm::dot(d_out, d_out)));
+            const glm::vec2 n_in = d_in / std::sqrt(conservativeLength2(d_in));
+            const glm::vec2 n_out = d_out / std::sqrt(conservativeLength2(d_out));
+            a = glm::vec2(a.x + conservativeMulRounded(2.0f * h, n_in.x), a.y + conservativeMulRounded(2.0f * h, n_in.y));
+            b = glm::vec2(b.x - conservativeMulRounded(2.0f * h, n_out.x), b.y - conservativeMulRounded(2.0f * h, n_out.y));
         }
         hull[2 * i] = a;
         hull[2 * i + 1] = b;
@@ -338,20 +497,24 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
     float h = params.expansion.x;
 
     const glm::vec4 c[3] = {clip0, clip1, clip2};
-    bool inside = true;
-    for (int i = 0; i < 3; ++i) {
-        inside = inside && glm::dot(params.near_plane, c[i]) >= 0.0f && c[i].w >= params.clipping.w &&
-                 std::abs(c[i].x) <= params.clipping.y * c[i].w && std::abs(c[i].y) <= params.clipping.z * c[i].w;
-    }
+    const bool inside = detail::conservativeVertexInside(c[0], params) && detail::conservativeVertexInside(c[1], params) &&
+                        detail::conservativeVertexInside(c[2], params);
     glm::vec2 polygon[kConservativeMaxPolygon];
     float depth[kConservativeMaxPolygon];
     int n = 3;
     if (inside) {
         for (int i = 0; i < 3; ++i) {
-            polygon[i] = glm::vec2(c[i].x, c[i].y) / c[i].w * half_size + half_size;
+            const glm::vec2 ndc = glm::vec2(c[i].x, c[i].y) / c[i].w;
+            polygon[i] = glm::vec2(detail::conservativeMulRounded(ndc.x, half_size.x),
+                                   detail::conservativeMulRounded(ndc.y, half_size.y)) + half_size;
             depth[i] = c[i].z / c[i].w;
         }
     } else {
+        if (detail::conservativeOutsideOnePlane(c, params)) {
+            out.kind = ConservativeHullKind::Culled;
+            return out;
+        }
+        out.spilled = setup.spill.enabled;  // the direct pass hands it to the spill pass
         n = detail::conservativeClip(c, params, polygon, depth);
         if (n == 0) {
             out.kind = ConservativeHullKind::Culled;
@@ -367,7 +530,7 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
     for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
             const glm::vec2 d = polygon[j] - polygon[i];
-            const float d2 = glm::dot(d, d);
+            const float d2 = detail::conservativeLength2(d);
             if (d2 > diameter2) {
                 diameter2 = d2;
                 far_a = i;
@@ -376,7 +539,9 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
         }
     }
     const float diameter = std::sqrt(diameter2);
-    const bool thin = std::abs(area2) <= (params.expansion.z + params.expansion.w * diameter) * diameter;
+    const float thin_bound = detail::conservativeMulRounded(
+        params.expansion.z + detail::conservativeMulRounded(params.expansion.w, diameter), diameter);
+    const bool thin = std::abs(area2) <= thin_bound;
     if (thin && setup.options.drop_degenerate) {
         out.kind = ConservativeHullKind::Dropped;
         return out;
@@ -392,12 +557,14 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
             const glm::vec3 a(polygon[i] - origin, depth[i]);
             const int j = i + 1 < n ? i + 1 : 0;
             const glm::vec3 b(polygon[j] - origin, depth[j]);
-            normal += glm::vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+            using detail::conservativeMulRounded;
+            normal += glm::vec3(conservativeMulRounded(a.y - b.y, a.z + b.z), conservativeMulRounded(a.z - b.z, a.x + b.x),
+                                conservativeMulRounded(a.x - b.x, a.y + b.y));
             mean += a;
         }
         mean /= static_cast<float>(n);
         gradient = -glm::vec2(normal.x, normal.y) / normal.z;
-        z0 = mean.z - glm::dot(gradient, glm::vec2(mean.x, mean.y));
+        z0 = mean.z - (detail::conservativeMulRounded(gradient.x, mean.x) + detail::conservativeMulRounded(gradient.y, mean.y));
     }
 
     if (thin) {
@@ -444,11 +611,16 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
         out.kind = ConservativeHullKind::Fallback;
     }
     PENUMBRA_ASSERT(count <= kConservativeMaxVertices);
+    // The direct pass declares 6: every hull it emits (unclipped triangle, thin hexagon or square,
+    // box fallback) fits.
+    PENUMBRA_ASSERT(!inside || setup.options.variant != ConservativeVariant::Fixed6 || count <= kConservativeFixed6MaxVertices);
     out.count = count;
     for (int j = 0; j < count; ++j) {
         const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
         const glm::vec2 q = out.pixels[static_cast<size_t>(index)];
-        const float z = std::clamp(z0 + glm::dot(gradient, q - origin), params.depth.x, params.depth.y);
+        const glm::vec2 dq = q - origin;
+        const float z = std::clamp(z0 + (detail::conservativeMulRounded(gradient.x, dq.x) + detail::conservativeMulRounded(gradient.y, dq.y)),
+                                   params.depth.x, params.depth.y);
         out.positions[static_cast<size_t>(j)] = glm::vec4(q / half_size - 1.0f, z, 1.0f);
     }
     return out;
@@ -456,6 +628,22 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
 
 inline ConservativeHull conservativeHull(const glm::vec4 (&clip)[3], const ConservativeRasterSetup& setup) {
     return conservativeHull(clip[0], clip[1], clip[2], setup);
+}
+
+/// CPU twin of penumbraConservativeNeedsSpill: true when the Fixed-6 direct pass appends this
+/// triangle to the spill buffer (finite, needs clipping, not entirely outside one clipping plane).
+/// Independent of the variant; in the Exact variant's single pass these are the clipped ones.
+inline bool conservativeNeedsSpill(const glm::vec4& clip0, const glm::vec4& clip1, const glm::vec4& clip2,
+                                   const ConservativeRasterSetup& setup) {
+    if (!(detail::conservativeFinite(clip0) && detail::conservativeFinite(clip1) && detail::conservativeFinite(clip2))) {
+        return false;
+    }
+    const glm::vec4 c[3] = {clip0, clip1, clip2};
+    if (detail::conservativeVertexInside(c[0], setup.params) && detail::conservativeVertexInside(c[1], setup.params) &&
+        detail::conservativeVertexInside(c[2], setup.params)) {
+        return false;
+    }
+    return !detail::conservativeOutsideOnePlane(c, setup.params);
 }
 
 /// The fragments GL's rule predicts for a hull (pixel centre strictly inside, or on an edge that

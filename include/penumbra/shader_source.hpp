@@ -18,6 +18,7 @@
 #define PENUMBRA_SHADER_SOURCE_HPP
 
 #include "penumbra/error.hpp"
+#include "penumbra/shader_defines.hpp"
 
 #include <cctype>
 #include <cstdlib>
@@ -45,13 +46,6 @@
 #endif
 
 namespace penumbra {
-
-/// One injected `#define NAME VALUE` (VALUE may be empty).
-struct ShaderDefine {
-    std::string name;
-    std::string value;
-};
-using ShaderDefines = std::vector<ShaderDefine>;
 
 /// A key -> GLSL text table. Value-initialised it is empty; ShaderLibrary::embedded() is the
 /// table built into the package.

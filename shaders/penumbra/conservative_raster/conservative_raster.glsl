@@ -3,7 +3,8 @@
 //
 // Integration summary
 //   needs:    a geometry shader with `layout(triangles) in;` and
-//             `layout(triangle_strip, max_vertices = PENUMBRA_CONSERVATIVE_MAX_VERTICES) out;`,
+//             `layout(triangle_strip, max_vertices = PENUMBRA_CONSERVATIVE_MAX_VERTICES) out;`
+//             (PENUMBRA_CONSERVATIVE_FIXED6_MAX_VERTICES with PENUMBRA_CONSERVATIVE_DIRECT=1),
 //             and a PenumbraConservativeParams value for the viewport being rendered (fill it with
 //             penumbra::conservativeRasterSetup on the host; upload it however you like).
 //   hook:     PENUMBRA_CONSERVATIVE_EMIT_VERTEX(position, box) — called once per output vertex in
@@ -16,11 +17,24 @@
 //             inside the triangle the interpolated depth is the triangle's own. The strip is always
 //             counter-clockwise in window space: cull back faces yourself before calling.
 //   call:     int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, params) — returns the
-//             number of vertices emitted (0: dropped or culled).
+//             number of vertices emitted (0: dropped, culled, or spilled in the direct pass); at most
+//             PENUMBRA_CONSERVATIVE_MAX_VERTICES (13), or 6 with PENUMBRA_CONSERVATIVE_DIRECT=1.
 //   defines:  PENUMBRA_CONSERVATIVE_EXACT 0 = the seed's fixed 6 vertices / 4 triangles per triangle
 //             (a case-(iii) corner over-covers by at most one pixel), 1 = the exact hull (<= 7);
 //             PENUMBRA_CONSERVATIVE_DROP_DEGENERATE 1 = drop triangles thinner than the threshold
-//             (zero-area ones included) instead of covering the pixels their points/edges touch.
+//             (zero-area ones included) instead of covering the pixels their points/edges touch;
+//             PENUMBRA_CONSERVATIVE_DIRECT 1 = the Fixed-6 direct pass: the geometry shader may
+//             declare max_vertices = PENUMBRA_CONSERVATIVE_FIXED6_MAX_VERTICES (6). A triangle for
+//             which penumbraConservativeNeedsSpill() is true (it needs clipping: near plane,
+//             w >= min_w or guard band) emits nothing here and goes to the hook
+//             PENUMBRA_CONSERVATIVE_SPILL(clip0, clip1, clip2) instead — append it to a spill buffer
+//             (conservative_raster_spill.glsl does that) and draw that buffer with a
+//             PENUMBRA_CONSERVATIVE_DIRECT 0 geometry shader (max_vertices 13) in a second pass.
+//             Both passes together emit exactly what the single pass emits. Needs EXACT 0.
+//   predicate: bool penumbraConservativeNeedsSpill(vec4 clip0, vec4 clip1, vec4 clip2, params):
+//             finite, not entirely outside one clipping plane, and not every vertex inside all of
+//             them (the 6-vertex hull covers only unclipped triangles). CPU twin:
+//             penumbra::conservativeNeedsSpill().
 //
 // Coverage contract (checked against an exact predicate in tests/conservative_raster_test.cpp):
 // let T be the triangle clipped to the near plane (dot(near_plane, clip) >= 0) and to w >= min_w,
@@ -67,6 +81,15 @@
 #ifndef PENUMBRA_CONSERVATIVE_DROP_DEGENERATE
 #define PENUMBRA_CONSERVATIVE_DROP_DEGENERATE 0
 #endif
+#ifndef PENUMBRA_CONSERVATIVE_DIRECT
+#define PENUMBRA_CONSERVATIVE_DIRECT 0
+#endif
+#if PENUMBRA_CONSERVATIVE_DIRECT && PENUMBRA_CONSERVATIVE_EXACT
+#error PENUMBRA_CONSERVATIVE_DIRECT=1 is the Fixed-6 pass; the exact hull of a triangle needs 7 vertices (use the single pass)
+#endif
+#if PENUMBRA_CONSERVATIVE_DIRECT && !defined(PENUMBRA_CONSERVATIVE_SPILL)
+#error penumbra/conservative_raster/conservative_raster.glsl with PENUMBRA_CONSERVATIVE_DIRECT=1 needs the hook PENUMBRA_CONSERVATIVE_SPILL(clip0, clip1, clip2)
+#endif
 
 // The polygon being dilated (viewport-relative pixels, NDC depth) and the hull being emitted.
 vec2 penumbraConservativePolygon[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
@@ -94,19 +117,66 @@ int penumbraConservativeEdgeCorner(vec2 d) {
 }
 
 float penumbraConservativeCross(vec2 a, vec2 b) {
-    return a.x * b.y - a.y * b.x;
+    precise float r = a.x * b.y - a.y * b.x;  // precise: the twin rounds both products (no FMA)
+    return r;
+}
+
+// dot(near_plane, c) in float, left to right, no FMA (the twin computes the same bits).
+float penumbraConservativeNearDistance(vec4 plane, vec4 c) {
+    precise float d = ((plane.x * c.x + plane.y * c.y) + plane.z * c.z) + plane.w * c.w;
+    return d;
+}
+
+// The unclipped fast path's test: the vertex lies inside the near plane, w >= min_w and the guard
+// band (float; the guard products are single roundings, so FMA cannot change them).
+bool penumbraConservativeVertexInside(vec4 c, PenumbraConservativeParams params) {
+    return penumbraConservativeNearDistance(params.near_plane, c) >= 0.0 && c.w >= params.clipping.w &&
+           abs(c.x) <= params.clipping.y * c.w && abs(c.y) <= params.clipping.z * c.w;
 }
 
 // Signed distance-like value of clip-space point c to clipping plane i (kept where >= 0):
 // 0 near plane, 1 w >= min_w, 2..5 guard band x >= -gx w, x <= gx w, y >= -gy w, y <= gy w.
+// precise, left to right: the twin computes the same bits.
 double penumbraConservativePlane(int i, dvec4 c, PenumbraConservativeParams params) {
-    if (i == 0) return dot(dvec4(params.near_plane), c);
+    if (i == 0) {
+        dvec4 n = dvec4(params.near_plane);
+        precise double d = ((n.x * c.x + n.y * c.y) + n.z * c.z) + n.w * c.w;
+        return d;
+    }
     if (i == 1) return c.w - double(params.clipping.w);
     double g = double(i < 4 ? params.clipping.y : params.clipping.z);
     double coordinate = i < 4 ? c.x : c.y;
-    return ((i & 1) == 0 ? coordinate : -coordinate) + g * c.w;
+    precise double d = ((i & 1) == 0 ? coordinate : -coordinate) + g * c.w;
+    return d;
 }
 
+// True when all three vertices lie strictly outside one clipping plane (evaluated in double as the
+// clipper does): nothing of the triangle can reach the viewport, so it is culled without clipping
+// (and never spilled).
+bool penumbraConservativeOutsideOnePlane(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativeParams params) {
+    dvec4 a = dvec4(c0), b = dvec4(c1), c = dvec4(c2);
+    for (int plane = 0; plane < 6; ++plane) {
+        if (penumbraConservativePlane(plane, a, params) < 0.0 && penumbraConservativePlane(plane, b, params) < 0.0 &&
+            penumbraConservativePlane(plane, c, params) < 0.0) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// The spill predicate (see the summary): the triangles the Fixed-6 direct pass hands to the hook.
+bool penumbraConservativeNeedsSpill(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConservativeParams params) {
+    if (!(penumbraConservativeFinite(clip0) && penumbraConservativeFinite(clip1) && penumbraConservativeFinite(clip2))) {
+        return false;
+    }
+    if (penumbraConservativeVertexInside(clip0, params) && penumbraConservativeVertexInside(clip1, params) &&
+        penumbraConservativeVertexInside(clip2, params)) {
+        return false;
+    }
+    return !penumbraConservativeOutsideOnePlane(clip0, clip1, clip2, params);
+}
+
+#if !PENUMBRA_CONSERVATIVE_DIRECT  // the direct pass never clips: it spills
 // Sutherland-Hodgman in double precision, homogeneous clip space; every intersection is computed
 // from the kept endpoint, so its error scales with the kept (small) coordinates. Writes the
 // projected polygon to penumbraConservativePolygon/Depth and returns its size (0: nothing left).
@@ -125,10 +195,14 @@ int penumbraConservativeClip(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativePara
             dvec4 cur = poly[i];
             double d_cur = penumbraConservativePlane(plane, cur, params);
             if (d_cur >= 0.0) {
-                if (d_prev < 0.0) next[m++] = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                if (d_prev < 0.0) {
+                    precise dvec4 x = cur + (d_cur / (d_cur - d_prev)) * (prev - cur);
+                    next[m++] = x;
+                }
                 next[m++] = cur;
             } else if (d_prev >= 0.0) {
-                next[m++] = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                precise dvec4 x = prev + (d_prev / (d_prev - d_cur)) * (cur - prev);
+                next[m++] = x;
             }
             prev = cur;
             d_prev = d_cur;
@@ -138,11 +212,13 @@ int penumbraConservativeClip(vec4 c0, vec4 c1, vec4 c2, PenumbraConservativePara
     }
     dvec2 half_size = dvec2(params.viewport.zw) * 0.5;
     for (int i = 0; i < n; ++i) {
-        penumbraConservativePolygon[i] = vec2(poly[i].xy / poly[i].w * half_size + half_size);
+        precise dvec2 q = poly[i].xy / poly[i].w * half_size + half_size;
+        penumbraConservativePolygon[i] = vec2(q);
         penumbraConservativeDepth[i] = float(poly[i].z / poly[i].w);
     }
     return n;
 }
+#endif
 
 // The exact dilation of the counter-clockwise polygon [0, n) by [-h, h]^2 into
 // penumbraConservativeHull (counter-clockwise). Returns the vertex count, or -1 when the extreme
@@ -185,11 +261,13 @@ int penumbraConservativeFixedHull(float h) {
         int k_out = penumbraConservativeEdgeCorner(d_out);
         int steps = (k_out - k_in) & 3;
         if (steps == 3) return -1;
-        vec2 a = p + h * penumbraConservativeCorner(k_in);
-        vec2 b = p + h * penumbraConservativeCorner(k_out);
+        precise vec2 a = p + h * penumbraConservativeCorner(k_in);
+        precise vec2 b = p + h * penumbraConservativeCorner(k_out);
         if (steps == 2) {  // case iii: extend both edges by one pixel (2h) past the corner
-            a += (2.0 * h) * normalize(d_in);
-            b -= (2.0 * h) * normalize(d_out);
+            precise vec2 n_in = d_in / sqrt(d_in.x * d_in.x + d_in.y * d_in.y);
+            precise vec2 n_out = d_out / sqrt(d_out.x * d_out.x + d_out.y * d_out.y);
+            a += (2.0 * h) * n_in;
+            b -= (2.0 * h) * n_out;
         }
         penumbraConservativeHull[2 * i] = a;
         penumbraConservativeHull[2 * i + 1] = b;
@@ -208,20 +286,24 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
 
     // 1. The polygon in viewport-relative pixels: fast path or clipped in double precision.
     vec4 c[3] = vec4[3](clip0, clip1, clip2);
-    bool inside = true;
-    for (int i = 0; i < 3; ++i) {
-        inside = inside && dot(params.near_plane, c[i]) >= 0.0 && c[i].w >= params.clipping.w &&
-                 abs(c[i].x) <= params.clipping.y * c[i].w && abs(c[i].y) <= params.clipping.z * c[i].w;
-    }
+    bool inside = penumbraConservativeVertexInside(clip0, params) && penumbraConservativeVertexInside(clip1, params) &&
+                  penumbraConservativeVertexInside(clip2, params);
     int n = 3;
     if (inside) {
         for (int i = 0; i < 3; ++i) {
-            penumbraConservativePolygon[i] = c[i].xy / c[i].w * half_size + half_size;
+            precise vec2 q = c[i].xy / c[i].w * half_size + half_size;  // the twin rounds the product
+            penumbraConservativePolygon[i] = q;
             penumbraConservativeDepth[i] = c[i].z / c[i].w;
         }
     } else {
+        if (penumbraConservativeOutsideOnePlane(clip0, clip1, clip2, params)) return 0;
+#if PENUMBRA_CONSERVATIVE_DIRECT
+        PENUMBRA_CONSERVATIVE_SPILL(clip0, clip1, clip2);  // the spill pass clips and emits it
+        return 0;
+#else
         n = penumbraConservativeClip(clip0, clip1, clip2, params);
         if (n == 0) return 0;
+#endif
     }
 
     // 2. Orientation, diameter and thinness (relative to a local origin: vertex 0).
@@ -236,7 +318,7 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     for (int i = 0; i < n; ++i) {
         for (int j = i + 1; j < n; ++j) {
             vec2 d = penumbraConservativePolygon[j] - penumbraConservativePolygon[i];
-            float d2 = dot(d, d);
+            precise float d2 = d.x * d.x + d.y * d.y;
             if (d2 > diameter2) {
                 diameter2 = d2;
                 far_a = i;
@@ -245,19 +327,20 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
         }
     }
     float diameter = sqrt(diameter2);
-    bool thin = abs(area2) <= (params.expansion.z + params.expansion.w * diameter) * diameter;
+    precise float thin_bound = (params.expansion.z + params.expansion.w * diameter) * diameter;
+    bool thin = abs(area2) <= thin_bound;
 #if PENUMBRA_CONSERVATIVE_DROP_DEGENERATE
     if (thin) return 0;
 #endif
 
     // 3. Depth plane z(p) = z0 + dot(gradient, p - origin) from Newell's normal; thin: nearest z.
-    float z0 = penumbraConservativeDepth[0];
-    vec2 gradient = vec2(0.0);
+    precise float z0 = penumbraConservativeDepth[0];
+    precise vec2 gradient = vec2(0.0);
     if (thin) {
         for (int i = 1; i < n; ++i) z0 = min(z0, penumbraConservativeDepth[i]);
     } else {
-        vec3 normal = vec3(0.0);
-        vec3 mean = vec3(0.0);
+        precise vec3 normal = vec3(0.0);
+        precise vec3 mean = vec3(0.0);
         for (int i = 0; i < n; ++i) {
             vec3 a = vec3(penumbraConservativePolygon[i] - origin, penumbraConservativeDepth[i]);
             int j = i + 1 < n ? i + 1 : 0;
@@ -267,7 +350,7 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
         }
         mean /= float(n);
         gradient = -normal.xy / normal.z;
-        z0 = mean.z - dot(gradient, mean.xy);
+        z0 = mean.z - (gradient.x * mean.x + gradient.y * mean.y);
     }
 
     // 4. Thin polygons become the segment between their farthest points, dilated by h + thickness.
@@ -324,7 +407,8 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     for (int j = 0; j < count; ++j) {
         int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
         vec2 p = penumbraConservativeHull[index];
-        float z = clamp(z0 + dot(gradient, p - origin), params.depth.x, params.depth.y);
+        vec2 dq = p - origin;
+        precise float z = clamp(z0 + (gradient.x * dq.x + gradient.y * dq.y), params.depth.x, params.depth.y);
         PENUMBRA_CONSERVATIVE_EMIT_VERTEX(vec4(p / half_size - 1.0, z, 1.0), box);
     }
     EndPrimitive();
