@@ -25,7 +25,8 @@
 // (which modes use it) and its value checks in checkArgs(). Vector-valued flags parse with
 // parseVec3 (as --light-pos does).
 #include <penumbra/gl/headless.hpp>
-#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/pipelines/alias_free_hard.hpp>
+#include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
@@ -75,14 +76,13 @@ struct Args {
     bool json = false;
     bool ground = true;
     bool reference = false;
-    // Next (issue 7 §2), not implemented yet: `--view-samples depth|exact` (a std::string here,
-    // CLI::IsMember in addOptions, a kModeFlags row if only hard mode uses it) and `--origin X,Y,Z`
-    // (text in RawArgs, parseVec3 in checkArgs, applied to scene, camera and light after loadScene).
+    std::string view_samples = "depth";  // hard mode: depth (reconstructed from the depth buffer) | exact
+    glm::dvec3 origin{0.0};              // the whole scene translated by this (double) offset
 };
 
 /// The flags' text as given, before checkArgs turns them into Args values.
 struct RawArgs {
-    std::string light_pos, light_radius, samples = "64", width = "512", height = "384";
+    std::string light_pos, light_radius, samples = "64", width = "512", height = "384", origin;
     bool no_ground = false;
 };
 
@@ -111,6 +111,7 @@ const ModeFlag kModeFlags[] = {
     {"--samples", true, false, "hard shadows use one light point, the light's centre"},
     {"--light-radius", true, false, "hard shadows use one light point, the light's centre"},
     {"--reference", false, true, "reference mode is the oracle already"},
+    {"--view-samples", false, true, "reference mode traces exact primary rays on the CPU"},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -133,6 +134,15 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_option("--out", a.out, "output image (.png); its folder must exist and be writable")
         ->type_name("FILE.png")
         ->capture_default_str();
+    app.add_option("--view-samples", a.view_samples,
+                   "hard mode: depth = positions reconstructed from the depth buffer (what an engine has), "
+                   "exact = the G-buffer's exact surface points")
+        ->type_name("depth|exact")
+        ->check(CLI::IsMember({"depth", "exact"}))
+        ->capture_default_str();
+    app.add_option("--origin", raw.origin,
+                   "translate scene, camera and light by x,y,z (in double); the GPU works camera-relative")
+        ->type_name("X,Y,Z");
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
 }
@@ -204,6 +214,7 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
         a.light_pos = parseVec3(raw.light_pos, "--light-pos");
         a.has_light_pos = true;
     }
+    if (!raw.origin.empty()) a.origin = parseVec3(raw.origin, "--origin");
     checkOutPath(a.out);
 }
 
@@ -394,6 +405,7 @@ Json reportHead(const Args& args, const char* mode) {
                             std::to_string(penumbra::kVersionPatch);
     j["scene"] = args.scene;
     j["mode"] = mode;
+    j["origin"] = Json::array({args.origin.x, args.origin.y, args.origin.z});
     return j;
 }
 
@@ -425,6 +437,11 @@ MergedScene merge(const penumbra::scene::Scene& scene) {
     return m;
 }
 
+/// Coplanar tolerance of the exact test for depth-reconstructed view samples: above the ~1e-5
+/// relative error of positions rebuilt from a 32-bit float depth buffer, so a sample is not
+/// shadowed by the very surface it was reconstructed from (docs/design.md).
+constexpr double kDepthCoplanarEpsilon = 2e-5;
+
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
             const std::vector<uint8_t>& material, const glm::dvec3& light_pos, double load_ms,
@@ -434,8 +451,9 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height;
     penumbra::scene::GBuffer gbuffer(w, h);
-    gbuffer.render(gpu, scene.camera.projection(float(w) / float(h)) * scene.camera.view());
-    const auto positions = gbuffer.positionBuffer().download<glm::vec4>();
+    const glm::mat4 camera = scene.camera.projection(float(w) / float(h)) * scene.camera.view();
+    gbuffer.render(gpu, camera);
+    const auto exact_positions = gbuffer.positionBuffer().download<glm::vec4>();
     const auto faces = gbuffer.faceBuffer().download<glm::vec4>();
     std::vector<float> shading(size_t(w) * h * 4);
     glGetTextureImage(gbuffer.shadingNormalTexture(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(shading.size() * 4),
@@ -443,9 +461,23 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     glFinish();
     const double gbuffer_ms = msSince(t0);
 
+    // The view samples the pipeline gets: the engine's depth buffer (positions reconstructed on the
+    // GPU) or the G-buffer's exact surface points. `positions` = the very floats it tests.
+    const bool depth_input = args.view_samples == "depth";
+    penumbra::SampleListsView view;
+    view.width = w;
+    view.height = h;
+    view.inverse_view_projection = glm::inverse(camera);
+    std::vector<glm::vec4> positions = exact_positions;
+    if (depth_input) {
+        std::vector<float> depth(size_t(w) * h);
+        glGetTextureImage(gbuffer.depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * 4), depth.data());
+        positions = penumbra::reconstructViewSamples(view, depth.data());
+    }
+
     // The light must see the view samples: a starting frustum around their box, then §4.3 fitting.
     size_t view_samples = 0;
-    const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), positions.size(), &view_samples);
+    const auto [lo, hi] = penumbra::viewSampleBounds(exact_positions.data(), exact_positions.size(), &view_samples);
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
     light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
@@ -453,46 +485,49 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     options.grid_width = w;
     options.grid_height = h;
     options.count_work = true;
+    if (depth_input) options.coplanar_epsilon = kDepthCoplanarEpsilon;
     penumbra::AliasFreeHardShadows pipeline(options);
+    pipeline.reserve(w * h);
     auto draw = [&](penumbra::CasterClass cls) {
         for (const auto& r : gpu.ranges()) {
             if (r.closed == (cls == penumbra::CasterClass::Closed)) gpu.draw(r);
         }
     };
-    pipeline.run({gbuffer.positionBuffer().id(), gbuffer.faceBuffer().id()}, w * h, light, draw);  // warm-up
+    const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()},
+                                                   {gbuffer.faceBuffer().id(), 0, gbuffer.faceBuffer().size()}};
+    const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), gbuffer.faceTexture(), view};
+    auto run = [&] {
+        return depth_input ? pipeline.run(depth_samples, light, draw) : pipeline.run(buffer_input, w * h, light, draw);
+    };
+    if (depth_input) pipeline.validate(depth_samples);
+    else pipeline.validate(buffer_input, w * h);
+    run();  // warm-up
     t0 = std::chrono::steady_clock::now();
-    const penumbra::AliasFreeHardFrame& frame = pipeline.run({gbuffer.positionBuffer().id(), gbuffer.faceBuffer().id()},
-                                                             w * h, light, draw);
+    const penumbra::Status status = run();
     glFinish();
     const double shadows_ms = msSince(t0);
+    if (status != penumbra::Status::Ok) {
+        std::fprintf(stderr, "soft_shadows: the hard-shadow pipeline returned '%s'\n", penumbra::statusName(status));
+        return 1;
+    }
+    const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
     const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, size_t(w) * h);
 
-    // --reference: the oracle's verdict on the same float samples and light point.
-    size_t tested = 0, mismatched = 0, ties = 0, shadowed = 0;
+    // --reference: the oracle's verdict on the same float samples and light point; for depth input
+    // also at the true surface points (the cost of depth reconstruction).
+    penumbra::reference::HardComparison same, true_surface;
     double reference_ms = 0;
     if (args.reference) {
         t0 = std::chrono::steady_clock::now();
-        std::vector<glm::dvec3> receivers;
-        std::vector<uint32_t> ids;
-        for (uint32_t i = 0; i < states.size(); ++i) {
-            if (states[i] != PENUMBRA_AFH_LIT && states[i] != PENUMBRA_AFH_SHADOWED) continue;
-            receivers.emplace_back(glm::vec3(positions[i]));
-            ids.push_back(i);
-        }
+        std::fprintf(stderr, "soft_shadows: oracle check of %zu samples...\n", states.size());
         penumbra::reference::VisibilityOptions vo;
         vo.coplanar_epsilon = options.coplanar_epsilon;
-        const auto result =
-            evaluateWithProgress(oracle, receivers, {glm::dvec3(glm::vec3(light.light))}, vo, "oracle check");
-        tested = receivers.size();
-        for (size_t r = 0; r < receivers.size(); ++r) {
-            if (result.isTie(r, 0)) {
-                ++ties;
-                continue;
-            }
-            mismatched += (states[ids[r]] == PENUMBRA_AFH_SHADOWED) != result.isBlocked(r, 0);
-        }
+        const penumbra::reference::HardLight hard_light = penumbra::reference::hardLight(light.light);
+        same = penumbra::reference::compareHardStates(oracle, positions, states, hard_light, vo);
+        if (depth_input) true_surface = penumbra::reference::compareHardStates(oracle, exact_positions, states, hard_light, vo);
         reference_ms = msSince(t0);
     }
+    size_t shadowed = 0;
 
     // Shade: Lambert with the hard visibility; rows flipped (GL's bottom row first).
     t0 = std::chrono::steady_clock::now();
@@ -505,11 +540,11 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         for (uint32_t x = 0; x < w; ++x) {
             const size_t i = size_t(y) * w + x;
             glm::vec3 c(0.08f, 0.09f, 0.12f);
-            if (positions[i].w != 0.0f) {
+            if (exact_positions[i].w != 0.0f) {
                 uint32_t triangle = 0;
                 std::memcpy(&triangle, &faces[i].w, 4);
                 const glm::vec3 n = glm::normalize(glm::vec3(shading[i * 4], shading[i * 4 + 1], shading[i * 4 + 2]));
-                const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(positions[i]));
+                const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(exact_positions[i]));
                 const float lit = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
                 shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
                 c = albedo[triangle < material.size() ? material[triangle] : 1] *
@@ -538,8 +573,18 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"occupancy", frame.statistics.occupancy()},
                      {"fragments", frame.fragments},
                      {"tests", frame.tests},
-                     {"triangles_emitted", frame.triangles_emitted}};
-        if (args.reference) j["reference"] = {{"samples", tested}, {"mismatched", mismatched}, {"ties", ties}};
+                     {"triangles_emitted", frame.triangles_emitted},
+                     {"overflow", frame.overflow},
+                     {"view_samples", args.view_samples},
+                     {"coplanar_epsilon", options.coplanar_epsilon}};
+        if (args.reference) {
+            j["reference"] = {{"samples", same.samples}, {"mismatched", same.mismatched}, {"ties", same.ties}};
+            if (depth_input) {
+                j["reference"]["true_surface"] = {{"samples", true_surface.samples},
+                                                  {"mismatched", true_surface.mismatched},
+                                                  {"ties", true_surface.ties}};
+            }
+        }
         j["timings_ms"] = {{"load", load_ms},        {"gbuffer", gbuffer_ms},        {"shadows", shadows_ms},
                            {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", total_ms}};
         j["out"] = args.out;
@@ -548,7 +593,13 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         std::printf("%s (hard, %s): %zu triangles, %zu samples tested, %zu shadowed, %.1f ms shadows -> %s\n",
                     args.scene.c_str(), context.renderer().c_str(), oracle.triangleCount(),
                     static_cast<size_t>(frame.statistics.listed_samples), shadowed, shadows_ms, args.out.c_str());
-        if (args.reference) std::printf("reference: %zu mismatched, %zu ties of %zu\n", mismatched, ties, tested);
+        if (args.reference) {
+            std::printf("reference: %zu mismatched, %zu ties of %zu\n", same.mismatched, same.ties, same.samples);
+            if (depth_input) {
+                std::printf("true surface: %zu of %zu disagree (depth reconstruction)\n", true_surface.mismatched,
+                            true_surface.samples);
+            }
+        }
     }
     return 0;
 }
@@ -660,6 +711,23 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
     return 0;
 }
 
+/// --origin: the world is the scene translated by `origin` (double). What the renderers and the
+/// oracle see is camera-relative — world minus the camera's world position, subtracted in double
+/// and rounded once to float (penumbra::relativePosition) — so float precision does not depend on
+/// how far from the world origin the scene is. `light_pos` (the scene's frame) moves along.
+void applyOrigin(penumbra::scene::Scene& scene, const glm::dvec3& origin, glm::dvec3& light_pos) {
+    if (origin == glm::dvec3(0.0)) return;
+    const glm::dvec3 frame = glm::dvec3(scene.camera.eye) + origin;
+    auto relative = [&](const glm::vec3& p) { return penumbra::relativePosition(glm::dvec3(p) + origin, frame); };
+    for (auto& mesh : scene.meshes) {
+        for (auto& p : mesh.positions) p = relative(p);
+    }
+    scene.camera.eye = relative(scene.camera.eye);
+    scene.camera.target = relative(scene.camera.target);
+    scene.light.position = relative(scene.light.position);
+    light_pos = (light_pos + origin) - frame;
+}
+
 penumbra::scene::Scene loadScene(const Args& args) {
     penumbra::scene::Scene scene;
     if (args.scene.rfind("builtin:", 0) == 0) {
@@ -706,8 +774,9 @@ int main(int argc, char** argv) {
 
         // ---- scene ----
         auto t0 = std::chrono::steady_clock::now();
-        const penumbra::scene::Scene scene = loadScene(args);
-        const glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
+        penumbra::scene::Scene scene = loadScene(args);
+        glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
+        applyOrigin(scene, args.origin, light_pos);
         const double light_radius = args.light_radius > 0 ? args.light_radius : double(scene.light.radius);
         if (args.mode == "reference") checkLight(scene, light_pos, light_radius);
         checkMemory(args, scene.triangleCount());

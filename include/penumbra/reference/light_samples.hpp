@@ -148,7 +148,7 @@ namespace reference {
 /// Throws penumbra::Error for count == 0, non-finite center or radius, negative radius.
 inline std::vector<glm::dvec3> sphereLightSamples(const glm::dvec3& center, double radius, uint32_t count,
                                                   uint32_t seed = 0) {
-    namespace ls = detail::light_samples;
+    namespace ls = ::penumbra::detail::light_samples;
     PENUMBRA_CHECK(count > 0, "sphereLightSamples: count must be > 0");
     ls::checkFinite(center, "sphereLightSamples", "center");
     ls::checkRadius(radius, "sphereLightSamples");
@@ -181,7 +181,7 @@ inline std::vector<glm::dvec3> sphereLightSamples(const glm::dvec3& center, doub
 /// Throws penumbra::Error for count == 0, non-finite inputs, zero normal, negative radius.
 inline std::vector<glm::dvec3> diskLightSamples(const glm::dvec3& center, const glm::dvec3& normal, double radius,
                                                 uint32_t count, uint32_t seed = 0) {
-    namespace ls = detail::light_samples;
+    namespace ls = ::penumbra::detail::light_samples;
     PENUMBRA_CHECK(count > 0, "diskLightSamples: count must be > 0");
     ls::checkFinite(center, "diskLightSamples", "center");
     ls::checkFinite(normal, "diskLightSamples", "normal");
@@ -220,7 +220,7 @@ inline std::vector<glm::dvec3> diskLightSamples(const glm::dvec3& center, const 
 /// Throws penumbra::Error for nu == 0, nv == 0 or non-finite inputs.
 inline std::vector<glm::dvec3> rectLightSamples(const glm::dvec3& corner, const glm::dvec3& edge_u,
                                                 const glm::dvec3& edge_v, uint32_t nu, uint32_t nv) {
-    namespace ls = detail::light_samples;
+    namespace ls = ::penumbra::detail::light_samples;
     PENUMBRA_CHECK(nu > 0 && nv > 0, "rectLightSamples: nu and nv must be > 0 (got ", nu, " x ", nv, ")");
     ls::checkFinite(corner, "rectLightSamples", "corner");
     ls::checkFinite(edge_u, "rectLightSamples", "edge_u");
