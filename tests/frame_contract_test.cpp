@@ -1,0 +1,184 @@
+// The per-frame contract (issue 7; docs/design.md, convention 2), recorded: after warm-up, every GL
+// call made inside Scanner::scan, SampleListBuilder::build and AliasFreeHardShadows::run (buffer
+// and depth input, with the GPU fit and statistics on) is logged through glad's debug loader
+// (support/gl_audit.hpp) and the heap is counted (support/alloc_counter.hpp): 0 queries (glGet*,
+// glIs*, glCheck*Status), 0 glGetError, 0 read-backs, 0 maps, 0 glFinish / fence waits, 0 heap
+// allocations. A queued engine error survives each call. The same holds for the conservative
+// spill helpers. Holds on any driver: it is about which calls are made, not their results.
+#include "support/alloc_counter.hpp"
+#include "support/gl_audit.hpp"
+#include "support/gl_test_support.hpp"
+
+#include <penumbra/gl/conservative_raster.hpp>
+#include <penumbra/gl/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/sample_lists.hpp>
+#include <penumbra/gl/scan.hpp>
+#include <penumbra/scene/gl_scene.hpp>
+#include <penumbra/scene/scene.hpp>
+
+#include <doctest/doctest.h>
+
+#include <functional>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using penumbra::Status;
+using penumbra::test::AllocationCounter;
+using penumbra::test::context;
+using penumbra::test::GlAudit;
+
+struct Recorded {
+    std::string report;
+    size_t calls = 0, queries = 0, error_checks = 0, read_backs = 0, maps = 0, sync_waits = 0, allocations = 0;
+    Status status = Status::Ok;
+};
+
+// Warm-up call, then the recorded one. `f` returns the per-frame call's Status.
+Recorded record(const std::function<Status()>& f) {
+    f();
+    glFinish();
+    GlAudit audit;
+    AllocationCounter heap;
+    Recorded r;
+    audit.start();
+    heap.start();
+    r.status = f();
+    heap.stop();
+    audit.stop();
+    r.report = audit.report();
+    r.calls = audit.calls();
+    r.queries = audit.queries();
+    r.error_checks = audit.errorChecks();
+    r.read_backs = audit.readBacks();
+    r.maps = audit.maps();
+    r.sync_waits = audit.syncWaits();
+    r.allocations = heap.allocations();
+    return r;
+}
+
+void checkContract(const Recorded& r, const std::string& what) {
+    INFO(what);
+    INFO(r.report);
+    CHECK(r.status == Status::Ok);
+    CHECK(r.calls > 0);
+    CHECK(r.queries == 0);
+    CHECK(r.error_checks == 0);
+    CHECK(r.read_backs == 0);
+    CHECK(r.maps == 0);
+    CHECK(r.sync_waits == 0);
+    CHECK(r.allocations == 0);
+    MESSAGE(what, ": ", r.calls, " GL calls, 0 queries, 0 glGetError, 0 read-backs/maps/waits, 0 allocations");
+}
+
+/// Queues GL_INVALID_ENUM as an engine would by mistake; the executor must leave it queued.
+void queueEngineError() { glBindBuffer(0xDEADu, 0); }
+
+penumbra::BufferRange range(const penumbra::gl::Buffer& b) { return {b.id(), 0, b.size()}; }
+
+// A small scene, G-buffer and light shared by the cases.
+struct World {
+    penumbra::scene::Scene scene = penumbra::scene::builtin("torus_knot");
+    penumbra::scene::GpuScene gpu{scene};
+    penumbra::scene::GBuffer gbuffer{96, 72};
+    penumbra::SampleListsLight light;
+    penumbra::SampleListsView view;
+    World() {
+        const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
+        gbuffer.render(gpu, camera);
+        const auto positions = gbuffer.positionBuffer().download<glm::vec4>();
+        const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), positions.size());
+        light.light = glm::vec4(scene.light.position, 1.0f);
+        light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
+        view.width = 96;
+        view.height = 72;
+        view.inverse_view_projection = glm::inverse(camera);
+    }
+    uint32_t samples() const { return 96 * 72; }
+    penumbra::SampleBufferInput bufferInput() const { return {range(gbuffer.positionBuffer()), range(gbuffer.faceBuffer())}; }
+    penumbra::SampleDepthInput depthInput() const { return {gbuffer.depthTexture(), gbuffer.faceTexture(), view}; }
+};
+
+}  // namespace
+
+TEST_CASE("Scanner::scan: no query, read-back, wait or allocation per frame; the engine's error survives") {
+    context();
+    const uint64_t n = (1u << 20) + 3;
+    std::vector<uint32_t> values(n, 1u);
+    auto in = penumbra::gl::Buffer::fromVector(values);
+    penumbra::gl::Buffer out(n * 4);
+    penumbra::Scanner scanner;
+    scanner.reserve(n);
+    scanner.validate(range(in), range(out), n);
+    checkContract(record([&] { return scanner.exclusive(range(in), range(out), n); }), "Scanner::exclusive 2^20+3");
+    queueEngineError();
+    scanner.exclusive(range(in), range(out), n);
+    CHECK(glGetError() == GL_INVALID_ENUM);
+}
+
+TEST_CASE("SampleListBuilder::build (fit + statistics on the GPU): buffer and depth input") {
+    context();
+    World w;
+    const penumbra::SampleListsSetup setup = penumbra::sampleListsSetup(96, 72, w.samples());
+    penumbra::gl::Buffer counts(setup.counts_bytes), offsets(setup.offsets_bytes), positions(setup.list_positions_bytes),
+        ids(setup.list_ids_bytes), slots(setup.sample_slots_bytes), texels(setup.sample_texels_bytes),
+        header(setup.header_bytes), frustum(sizeof(penumbra::SampleListsFrustum));
+    const penumbra::SampleListsBuffers out{range(counts), range(offsets), range(positions), range(ids),
+                                           range(slots),  range(texels),  range(header),    range(frustum)};
+    penumbra::SampleListBuilder builder;
+    builder.reserve(setup);
+    builder.validate(setup, w.bufferInput(), out);
+    builder.validate(setup, w.depthInput(), out);
+    penumbra::SampleListsBuild build;
+    build.fit_frustum = true;
+    build.statistics = true;
+    checkContract(record([&] { return builder.build(setup, w.light, w.bufferInput(), out, {}, build); }),
+                  "SampleListBuilder::build, buffer input");
+    checkContract(record([&] { return builder.build(setup, w.light, w.depthInput(), out, {}, build); }),
+                  "SampleListBuilder::build, depth input");
+    queueEngineError();
+    builder.build(setup, w.light, w.bufferInput(), out, {}, build);
+    CHECK(glGetError() == GL_INVALID_ENUM);
+    // Misuse detected without GL: a Status and not one GL call.
+    penumbra::SampleListsBuffers small = out;
+    small.counts.size = 4;
+    const Recorded misuse = record([&] { return builder.build(setup, w.light, w.bufferInput(), small); });
+    CHECK(misuse.status == Status::RangeTooSmall);
+    CHECK(misuse.calls == 0);
+    CHECK(misuse.allocations == 0);
+}
+
+TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast") {
+    context();
+    World w;
+    auto draw = [&](penumbra::CasterClass cls) {
+        for (const auto& r : w.gpu.ranges()) {
+            if (r.closed == (cls == penumbra::CasterClass::Closed)) w.gpu.draw(r);
+        }
+    };
+    const penumbra::AliasFreeHardShadows::DrawCasters casters = draw;  // built once, outside the frame
+    for (auto precision : {penumbra::AfhPrecision::Exact, penumbra::AfhPrecision::Fast}) {
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 96;
+        o.grid_height = 72;
+        o.precision = precision;
+        penumbra::AliasFreeHardShadows pipeline(o);
+        pipeline.reserve(w.samples());
+        pipeline.validate(w.bufferInput(), w.samples());
+        pipeline.validate(w.depthInput());
+        const char* name = precision == penumbra::AfhPrecision::Exact ? "run, exact" : "run, fast";
+        checkContract(record([&] { return pipeline.run(w.bufferInput(), w.samples(), w.light, casters); }),
+                      std::string(name) + ", buffer input");
+        checkContract(record([&] { return pipeline.run(w.depthInput(), w.light, casters); }),
+                      std::string(name) + ", depth input");
+        queueEngineError();
+        pipeline.run(w.bufferInput(), w.samples(), w.light, casters);
+        CHECK(glGetError() == GL_INVALID_ENUM);
+        const Recorded misuse = record([&] { return pipeline.run(w.bufferInput(), w.samples() + 1, w.light, casters); });
+        CHECK(misuse.status == Status::NotReserved);
+        CHECK(misuse.calls == 0);
+    }
+}
