@@ -12,6 +12,7 @@ packages=(
   libosmesa6 libosmesa6-dev          # the second headless backend
   glslang-tools                      # glslangValidator for the shader tests
   libtinyobjloader-dev libstb-dev    # OBJ scenes, PNG output
+  libgmp-dev                         # exact rational signs in blocker_filter_test
 )
 
 missing=()
