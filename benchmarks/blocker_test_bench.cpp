@@ -9,8 +9,13 @@
 // passes (about the light pass's conservative coverage; the sample's own triangle among them).
 //
 // Counters: ms_filtered, ms_fp64 (per run, glFinish + wall clock), speedup = ms_fp64 /
-// ms_filtered (measured in this entry), fallback = fraction of pairs the filter left to double,
-// pairs, err_mismatch = pairs whose filtered verdict differs from the fp64-only one (must be 0).
+// ms_filtered (measured in this entry), ms_deferred / speedup_deferred: the filter with its
+// fallbacks deferred to the end of each window of 32 slots (mode 2 of the kernel: a SIMD group
+// then runs its double tests together instead of at every iteration where one lane falls back),
+// fallback = fraction of pairs the filter left to double,
+// simd32_fallback = share of lock-step iterations of 32 invocations in which at least one lane
+// takes the double path (what a 32-wide GPU pays for the inline fallback),
+// pairs, err_mismatch = pairs where a filtered variant's verdict differs from fp64-only (must be 0).
 // llvmpipe runs fp64 at nearly float speed (CPU SIMD: half the lanes), so the speed-up measured
 // there understates GPUs whose fp64 rate is 1/32-1/64 of float.
 #include "bench_common.hpp"
@@ -98,11 +103,12 @@ void BM_BlockerTestFilteredVsFp64(benchmark::State& state) {
         penumbra::gl::buildComputeProgram(key, {{"PENUMBRA_AFH_FILTER_TEST_MODE", "1"}, {"PENUMBRA_AFH_FILTERED", "1"}}, lib);
     penumbra::gl::Program fp64 =
         penumbra::gl::buildComputeProgram(key, {{"PENUMBRA_AFH_FILTER_TEST_MODE", "1"}, {"PENUMBRA_AFH_FILTERED", "0"}}, lib);
+    penumbra::gl::Program deferred = penumbra::gl::buildComputeProgram(key, {{"PENUMBRA_AFH_FILTER_TEST_MODE", "2"}}, lib);
     const auto triangles = penumbra::gl::Buffer::fromVector(pairs.triangles);
     const auto fragments = penumbra::gl::Buffer::fromVector(pairs.fragments);
     const auto samples = penumbra::gl::Buffer::fromVector(pairs.samples);
     const size_t slots = pairs.samples.size();
-    penumbra::gl::Buffer results(slots * 4), results_fp64(slots * 4), results_check(slots * 4);
+    penumbra::gl::Buffer results(slots * 4), results_fp64(slots * 4), results_check(slots * 4), results_deferred(slots * 4);
     const uint32_t fragment_count = uint32_t(pairs.fragments.size());
     const auto dispatch = [&](const penumbra::gl::Program& program, const penumbra::gl::Buffer& out) {
         glUseProgram(program.id());
@@ -121,32 +127,55 @@ void BM_BlockerTestFilteredVsFp64(benchmark::State& state) {
     penumbra::bench::timeGpu([&] {
         dispatch(filtered, results);
         dispatch(fp64, results_fp64);
+        dispatch(deferred, results_deferred);
     });
-    double filtered_s = 0, fp64_s = 0;
+    double filtered_s = 0, fp64_s = 0, deferred_s = 0;
     int runs = 0;
     for (auto _ : state) {
         const double f = penumbra::bench::timeGpu([&] { dispatch(filtered, results); });
         const double d = penumbra::bench::timeGpu([&] { dispatch(fp64, results_fp64); });
+        const double q = penumbra::bench::timeGpu([&] { dispatch(deferred, results_deferred); });
         filtered_s += f;
         fp64_s += d;
+        deferred_s += q;
         ++runs;
-        state.SetIterationTime(f + d);
+        state.SetIterationTime(f + d + q);
     }
     // Outside the timed region: the verdicts of both variants and the filter's states.
     dispatch(check, results_check);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     const std::vector<uint32_t> a = results.download<uint32_t>(), b = results_fp64.download<uint32_t>();
-    const std::vector<uint32_t> c = results_check.download<uint32_t>();
+    const std::vector<uint32_t> c = results_check.download<uint32_t>(), q = results_deferred.download<uint32_t>();
     uint64_t mismatch = 0, uncertain = 0;
     for (size_t i = 0; i < slots; ++i) {
-        mismatch += a[i] != b[i] || ((c[i] >> 2) & 1u) != ((c[i] >> 3) & 1u) || ((c[i] >> 3) & 1u) != b[i];
+        mismatch += a[i] != b[i] || q[i] != b[i] || ((c[i] >> 2) & 1u) != ((c[i] >> 3) & 1u) || ((c[i] >> 3) & 1u) != b[i];
         uncertain += (c[i] & 3u) == 2u;
     }
+    // SIMD divergence (device-independent): 32 consecutive invocations walk their lists in lock
+    // step; with the inline fallback a group runs the double test at every step where any lane
+    // is uncertain. simd32_fallback = those steps / all steps (what a 32-wide GPU pays in fp64).
+    uint64_t steps = 0, double_steps = 0;
+    for (size_t g = 0; g < pairs.fragments.size(); g += 32) {
+        const size_t end = std::min(pairs.fragments.size(), g + 32);
+        uint32_t longest = 0;
+        for (size_t f = g; f < end; ++f) longest = std::max(longest, pairs.fragments[f].z);
+        for (uint32_t k = 0; k < longest; ++k) {
+            bool any = false;
+            for (size_t f = g; f < end && !any; ++f) {
+                any = k < pairs.fragments[f].z && (c[pairs.fragments[f].y + k] & 3u) == 2u;
+            }
+            ++steps;
+            double_steps += any;
+        }
+    }
+    state.counters["simd32_fallback"] = steps ? double(double_steps) / double(steps) : 0.0;
     state.SetLabel(scene);
     state.counters["pairs"] = double(slots);
     state.counters["ms_filtered"] = 1e3 * filtered_s / std::max(runs, 1);
     state.counters["ms_fp64"] = 1e3 * fp64_s / std::max(runs, 1);
+    state.counters["ms_deferred"] = 1e3 * deferred_s / std::max(runs, 1);
     state.counters["speedup"] = filtered_s > 0 ? fp64_s / filtered_s : 0.0;
+    state.counters["speedup_deferred"] = deferred_s > 0 ? fp64_s / deferred_s : 0.0;
     state.counters["fallback"] = slots ? double(uncertain) / double(slots) : 0.0;
     state.counters["err_mismatch"] = double(mismatch);
 }

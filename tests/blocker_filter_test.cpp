@@ -406,6 +406,8 @@ TEST_CASE("GPU: filtered GLSL == fp64-only GLSL on the same inputs; GPU filter s
     lib.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders");
     penumbra::gl::Program program = penumbra::gl::buildComputeProgram(
         "alias_free_hard/blocker_filter_test.comp.glsl", {{"PENUMBRA_AFH_FILTER_TEST_MODE", "0"}}, lib);
+    penumbra::gl::Program deferred = penumbra::gl::buildComputeProgram(
+        "alias_free_hard/blocker_filter_test.comp.glsl", {{"PENUMBRA_AFH_FILTER_TEST_MODE", "2"}}, lib);
     Generator gen(penumbra::test::testSeed(2));
     // Batches share light, reach, eps and offset (uniforms): each batch draws one case's settings
     // and then many cases' geometry with them.
@@ -432,9 +434,11 @@ TEST_CASE("GPU: filtered GLSL == fp64-only GLSL on the same inputs; GPU filter s
         const auto tri_buffer = penumbra::gl::Buffer::fromVector(triangles);
         const auto fragment_buffer = penumbra::gl::Buffer::fromVector(fragments);
         const auto sample_buffer = penumbra::gl::Buffer::fromVector(samples);
-        penumbra::gl::Buffer results(per_batch * 4);
+        penumbra::gl::Buffer results(per_batch * 4), results_deferred(per_batch * 4);
         results.fill(0xFFFFFFFFu);
-        glUseProgram(program.id());
+        results_deferred.fill(0xFFFFFFFFu);
+        for (const penumbra::gl::Program* prog : {&program, &deferred}) {
+        glUseProgram(prog->id());
         glUniform4fv(0, 1, &settings.light.x);
         glUniform1f(1, settings.reach);
         glUniform1d(2, settings.eps);
@@ -443,16 +447,18 @@ TEST_CASE("GPU: filtered GLSL == fp64-only GLSL on the same inputs; GPU filter s
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tri_buffer.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, sample_buffer.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, results.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, prog == &program ? results.id() : results_deferred.id());
         glDispatchCompute((per_batch + 63) / 64, 1, 1);
+        }
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         const std::vector<uint32_t> words = results.download<uint32_t>();
+        const std::vector<uint32_t> words_deferred = results_deferred.download<uint32_t>();
         for (uint32_t i = 0; i < per_batch; ++i) {
             const Case& k = cases[i];
             const uint32_t w = words[i];
             const bool filtered = (w >> 2) & 1u, fp64 = (w >> 3) & 1u;
             ++total;
-            mismatched += w > 15u || filtered != fp64;
+            mismatched += w > 15u || filtered != fp64 || words_deferred[i] != uint32_t(fp64);
             uncertain += (w & 3u) == 2u;
             glm::vec3 lf;
             float l_error;
@@ -467,7 +473,7 @@ TEST_CASE("GPU: filtered GLSL == fp64-only GLSL on the same inputs; GPU filter s
             cpu_mismatched += cpu_fp64 != fp64;
         }
     }
-    MESSAGE("GPU cases ", total, ", filtered != fp64: ", mismatched, ", fallback ", 100.0 * double(uncertain) / double(total),
+    MESSAGE("GPU cases ", total, ", filtered (inline or deferred) != fp64: ", mismatched, ", fallback ", 100.0 * double(uncertain) / double(total),
             " %, GPU state != CPU state: ", state_mismatched, ", GPU fp64 != CPU afhBlocks<double>: ", cpu_mismatched);
     CHECK(total >= 100000);
     CHECK(mismatched == 0);

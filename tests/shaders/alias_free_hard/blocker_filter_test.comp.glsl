@@ -6,11 +6,16 @@
 //       filtered verdict << 2 | fp64-only verdict << 3 (the GPU identity check).
 //   1: word = penumbraAfhBlocksLight verdict (PENUMBRA_AFH_FILTERED as defined: 1 = filtered,
 //       0 = fp64-only), the two timed variants.
+//   2: word = the filtered verdict with the fallback deferred: the walk goes in windows of 32
+//       slots, uncertain ones are marked in a bit mask and their double tests run together at the
+//       window's end, so the lanes of a SIMD group do not each take the double path at a
+//       different iteration of the walk.
 // penumbra-permutation: PENUMBRA_AFH_FILTER_TEST_MODE=0
 // penumbra-permutation: PENUMBRA_AFH_FILTER_TEST_MODE=1 PENUMBRA_AFH_FILTERED=1
 // penumbra-permutation: PENUMBRA_AFH_FILTER_TEST_MODE=1 PENUMBRA_AFH_FILTERED=0
+// penumbra-permutation: PENUMBRA_AFH_FILTER_TEST_MODE=2
 #ifndef PENUMBRA_AFH_FILTER_TEST_MODE
-#error "PENUMBRA_AFH_FILTER_TEST_MODE must be defined (0: identity check, 1: timed light-pass call)"
+#error "PENUMBRA_AFH_FILTER_TEST_MODE must be defined (0: identity check, 1: timed light-pass call, 2: deferred fallback)"
 #endif
 #define PENUMBRA_AFH_EXACT 1
 #include "penumbra/alias_free_hard/blocker_test.glsl"
@@ -28,6 +33,23 @@ layout(location = 2) uniform double afhFilterTestEpsilon;
 layout(location = 3) uniform double afhFilterTestOffset;
 layout(location = 4) uniform uint afhFilterTestFragmentCount;
 
+#if PENUMBRA_AFH_FILTER_TEST_MODE == 2
+// The double tests of the slots of `mask` (bit k: slot base + k), run together.
+void afhFilterTestFallbacks(uint base, uint mask, vec3 a, vec3 b, vec3 c) {
+    const bool point_light = afhFilterTestLight.w != 0.0;
+    while (mask != 0u) {
+        const uint slot = base + uint(findLSB(mask));
+        mask &= mask - 1u;
+        const vec3 p = afhFilterTestSamples[slot].xyz;
+        const bool blocked = penumbraAfhBlocks(dvec3(a), dvec3(b), dvec3(c), dvec3(p),
+                                               penumbraAfhLightPoint(dvec3(p), dvec3(afhFilterTestLight.xyz),
+                                                                     double(afhFilterTestReach), point_light),
+                                               afhFilterTestEpsilon, afhFilterTestOffset);
+        afhFilterTestResults[slot] = blocked ? 1u : 0u;
+    }
+}
+#endif
+
 void main() {
     const uint f = gl_GlobalInvocationID.x;
     if (f >= afhFilterTestFragmentCount) return;
@@ -35,9 +57,12 @@ void main() {
     const vec3 a = afhFilterTestTriangles[3u * fragment.x].xyz;
     const vec3 b = afhFilterTestTriangles[3u * fragment.x + 1u].xyz;
     const vec3 c = afhFilterTestTriangles[3u * fragment.x + 2u].xyz;
+#if PENUMBRA_AFH_FILTER_TEST_MODE == 2
+    uint base = fragment.y, pending = 0u;
+#endif
     for (uint slot = fragment.y; slot < fragment.y + fragment.z; ++slot) {
         const vec3 p = afhFilterTestSamples[slot].xyz;
-#if PENUMBRA_AFH_FILTER_TEST_MODE == 0
+#if PENUMBRA_AFH_FILTER_TEST_MODE == 0 || PENUMBRA_AFH_FILTER_TEST_MODE == 2
         const bool point_light = afhFilterTestLight.w != 0.0;
         vec3 l = afhFilterTestLight.xyz;
         float l_error = 0.0;
@@ -49,6 +74,16 @@ void main() {
             l_error = e + penumbraAfhFilterTiny;
         }
         const int state = penumbraAfhBlocksFilter(a, b, c, p, l, l_error, afhFilterTestEpsilon, afhFilterTestOffset);
+#endif
+#if PENUMBRA_AFH_FILTER_TEST_MODE == 2
+        if (state == PENUMBRA_AFH_FILTER_UNCERTAIN) pending |= 1u << (slot - base);
+        else afhFilterTestResults[slot] = state == PENUMBRA_AFH_FILTER_TRUE ? 1u : 0u;
+        if (slot - base == 31u) {
+            afhFilterTestFallbacks(base, pending, a, b, c);
+            base = slot + 1u;
+            pending = 0u;
+        }
+#elif PENUMBRA_AFH_FILTER_TEST_MODE == 0
         const bool filtered = penumbraAfhBlocksFiltered(a, b, c, p, afhFilterTestLight, afhFilterTestReach,
                                                         afhFilterTestEpsilon, afhFilterTestOffset);
         const bool fp64 = penumbraAfhBlocks(dvec3(a), dvec3(b), dvec3(c), dvec3(p),
@@ -61,4 +96,7 @@ void main() {
                                                             afhFilterTestEpsilon, afhFilterTestOffset) ? 1u : 0u;
 #endif
     }
+#if PENUMBRA_AFH_FILTER_TEST_MODE == 2
+    afhFilterTestFallbacks(base, pending, a, b, c);
+#endif
 }
