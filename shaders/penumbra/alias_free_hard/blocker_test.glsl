@@ -285,8 +285,9 @@ int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_erro
 
 // Filter, then the double test where the filter is uncertain. light.w != 0: point light at
 // light.xyz; light.w == 0: directional, unit vector light.xyz, light point `reach` away.
-bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
-                               double offset) {
+// `fallbacks` counts the pairs that took the double test.
+bool penumbraAfhBlocksFilteredCounted(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
+                                      double offset, inout uint fallbacks) {
     const bool point_light = light.w != 0.0;
     vec3 l = light.xyz;
     float l_error = 0.0;
@@ -299,25 +300,39 @@ bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float
     }
     const int verdict = penumbraAfhBlocksFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset);
     if (verdict != PENUMBRA_AFH_FILTER_UNCERTAIN) return verdict == PENUMBRA_AFH_FILTER_TRUE;
+    ++fallbacks;
     return penumbraAfhBlocks(dvec3(a), dvec3(b), dvec3(c), dvec3(p),
                              penumbraAfhLightPoint(dvec3(p), dvec3(light.xyz), double(reach), point_light),
                              coplanar_epsilon, offset);
 }
 
+bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
+                               double offset) {
+    uint fallbacks = 0u;
+    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
+}
+
 #endif  // PENUMBRA_AFH_EXACT
 
 // The light pass's call: float inputs as stored, the variant the defines select (exact filtered,
-// exact fp64-only with PENUMBRA_AFH_FILTERED 0, or float with PENUMBRA_AFH_EXACT 0).
-bool penumbraAfhBlocksLight(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
-                            penumbraAfhReal offset) {
+// exact fp64-only with PENUMBRA_AFH_FILTERED 0, or float with PENUMBRA_AFH_EXACT 0). `fallbacks`
+// counts the filtered mode's double tests (unchanged otherwise).
+bool penumbraAfhBlocksLightCounted(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
+                                   penumbraAfhReal offset, inout uint fallbacks) {
 #if PENUMBRA_AFH_EXACT && PENUMBRA_AFH_FILTERED
-    return penumbraAfhBlocksFiltered(a, b, c, p, light, reach, coplanar_epsilon, offset);
+    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
 #else
     const penumbraAfhVec3 l = penumbraAfhLightPoint(penumbraAfhVec3(p), penumbraAfhVec3(light.xyz), penumbraAfhReal(reach),
                                                     light.w != 0.0);
     return penumbraAfhBlocks(penumbraAfhVec3(a), penumbraAfhVec3(b), penumbraAfhVec3(c), penumbraAfhVec3(p), l,
                              coplanar_epsilon, offset);
 #endif
+}
+
+bool penumbraAfhBlocksLight(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
+                            penumbraAfhReal offset) {
+    uint fallbacks = 0u;
+    return penumbraAfhBlocksLightCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
 }
 
 #endif
