@@ -250,6 +250,17 @@ TEST_CASE("GPU pipeline == CPU twin, both raster variants and precisions; skips 
             }
         }
     }
+    // The exact mode's float filter (default) against fp64-only blocker tests: same states.
+    for (auto variant : {penumbra::ConservativeVariant::Fixed6, penumbra::ConservativeVariant::Exact}) {
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 96;
+        o.grid_height = 72;
+        o.variant = variant;
+        o.fp64_only = true;
+        penumbra::AliasFreeHardShadows pipeline(o);
+        pipeline.run(f.input(), f.samples(), light, f.drawer());
+        CHECK(pipeline.stateBuffer().download<uint32_t>(0, f.samples()) == reference_states);
+    }
 }
 
 TEST_CASE("0 mismatches against the oracle on every scene with three point lights, 256x256") {
@@ -359,6 +370,23 @@ TEST_CASE("long lists are walked in blocks over several passes with identical re
             CHECK(frame.passes > 1);
             CHECK(states == one_pass);
         }
+    }
+}
+
+TEST_CASE("exact mode's float filter: share of light-pass blocker tests that fall back to double") {
+    context();
+    for (const std::string& name : penumbra::scene::builtinNames()) {
+        Fixture f(penumbra::scene::builtin(name), 256, 256);
+        const auto light = pointLight(f, f.scene.light.position);
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 256;
+        o.grid_height = 256;
+        o.count_work = true;
+        penumbra::AliasFreeHardShadows pipeline(o);
+        const auto& frame = pipeline.run(f.input(), f.samples(), light, f.drawer());
+        MESSAGE(name, ": tests ", frame.tests, ", fallbacks ", frame.fallbacks, " (",
+                100.0 * double(frame.fallbacks) / double(std::max<uint64_t>(frame.tests, 1)), " %)");
+        CHECK(frame.fallbacks < frame.tests);
     }
 }
 

@@ -76,6 +76,9 @@ struct AliasFreeHardOptions {
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H (sintorn2008 uses the view size)
     ConservativeVariant variant = ConservativeVariant::Fixed6;
     AfhPrecision precision = AfhPrecision::Exact;
+    /// Exact mode only: run every blocker test in double (true) instead of the float filter that
+    /// falls back to double where a sign is uncertain (false, default; identical results).
+    bool fp64_only = false;
     double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise (~1 ulp)
     float sample_offset = 0.0f;      ///< world units; see the summary (0 = exact geometry)
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
@@ -102,6 +105,7 @@ struct AliasFreeHardFrame {
     SampleListStatistics statistics;        ///< Fig. 9, of the lists the light pass walked
     uint32_t passes = 0;                    ///< list blocks = light-pass draws of every caster
     uint64_t fragments = 0, tests = 0, triangles_emitted = 0;  ///< when count_work
+    uint64_t fallbacks = 0;  ///< when count_work, exact filtered mode: tests that ran in double
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -379,6 +383,8 @@ public:
         conservative_ = afhConservativeSetup(options_);
         ShaderDefines defines = conservative_.defines;
         defines.push_back({"PENUMBRA_AFH_EXACT", options_.precision == AfhPrecision::Exact ? "1" : "0"});
+        // blocker_test.glsl: float filter with a proven bound in front of the double test (same bits).
+        defines.push_back({"PENUMBRA_AFH_FILTERED", options_.fp64_only ? "0" : "1"});
         defines.push_back({"PENUMBRA_AFH_COUNT_WORK", options_.count_work ? "1" : "0"});
         defines.push_back({"PENUMBRA_AFH_SKIP_SHADOWED", options_.skip_shadowed ? "1" : "0"});
         light_pass_ = gl::buildProgram({"penumbra/alias_free_hard/light_pass.vert.glsl",
@@ -471,6 +477,7 @@ public:
             frame_.fragments = work[PENUMBRA_AFH_WORK_FRAGMENTS];
             frame_.tests = work[PENUMBRA_AFH_WORK_TESTS];
             frame_.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
+            frame_.fallbacks = work[PENUMBRA_AFH_WORK_FALLBACKS];
         }
         gl::checkErrors("penumbra::AliasFreeHardShadows::run");
         return frame_;

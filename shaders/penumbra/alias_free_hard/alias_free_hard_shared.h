@@ -30,6 +30,7 @@
 #define PENUMBRA_AFH_WORK_FRAGMENTS 0
 #define PENUMBRA_AFH_WORK_TESTS 1
 #define PENUMBRA_AFH_WORK_TRIANGLES 2
+#define PENUMBRA_AFH_WORK_FALLBACKS 3  // exact filtered mode: blocker tests the float filter left to double
 #define PENUMBRA_AFH_WORK_WORDS 4
 
 #ifdef __cplusplus
