@@ -126,9 +126,11 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
 // decision as penumbraAfhBlocks in double on every input, computed in float whenever a forward
 // error bound proves that float and double agree (a semi-static filter in the manner of
 // Shewchuk's robust predicates), and by penumbraAfhBlocks itself otherwise. fp64 runs at 1/32 to
-// 1/64 rate on consumer GPUs (emulated on some); the fallback is taken on a few % of the pairs
-// (samples lying on the caster's plane, where the coplanar rule must be decided in double, and
-// lines within float noise of an edge). Design and proof: include/penumbra/detail/blocker_filter.hpp,
+// 1/64 rate on consumer GPUs (emulated on some). The fallback is taken for samples lying on the
+// caster's plane (within float noise: the coplanar rule's epsilon, 1e-7, is below what float
+// resolves, so it is decided in double) and for lines within float noise of an edge. Measured:
+// 0.45-34 % of realistic (sample, triangle) pairs, 13-44 % of the light pass's tests on the
+// built-in scenes at 256x256 (mostly ground samples against the ground triangle they lie on). Design and proof: include/penumbra/detail/blocker_filter.hpp,
 // whose CPU model runs these float operations in this order (tests/blocker_filter_test.cpp).
 //
 // The double verdict is a conjunction: opposite sides AND not coplanar (p) AND not coplanar (l)
