@@ -257,6 +257,16 @@ TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions
                 }
             }
         }
+        // The exact mode's float filter (default) against fp64-only blocker tests: same states.
+        for (auto variant : {penumbra::ConservativeVariant::Fixed6, penumbra::ConservativeVariant::Exact}) {
+            penumbra::AliasFreeHardOptions o;
+            o.grid_width = 96;
+            o.grid_height = 72;
+            o.variant = variant;
+            o.fp64_only = true;
+            penumbra::AliasFreeHardShadows pipeline(o);
+            CHECK(runPipeline(pipeline, f, light, v) == reference_states);
+        }
     }
 }
 
@@ -470,6 +480,24 @@ TEST_CASE("far from the origin: camera-relative coordinates give 0 mismatches at
                 CHECK(c.mismatched == 0);
             }
         }
+    }
+}
+
+TEST_CASE("exact mode's float filter: share of light-pass blocker tests that fall back to double") {
+    context();
+    for (const std::string& name : penumbra::scene::builtinNames()) {
+        Fixture f(penumbra::scene::builtin(name), 256, 256);
+        const auto light = pointLight(f, f.scene.light.position);
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 256;
+        o.grid_height = 256;
+        o.count_work = true;
+        penumbra::AliasFreeHardShadows pipeline(o);
+        runPipeline(pipeline, f, light, ViewSamples::Exact);
+        const auto frame = pipeline.readFrame();
+        MESSAGE(name, ": tests ", frame.tests, ", fallbacks ", frame.fallbacks, " (",
+                100.0 * double(frame.fallbacks) / double(std::max<uint64_t>(frame.tests, 1)), " %)");
+        CHECK(frame.fallbacks < frame.tests);
     }
 }
 

@@ -15,6 +15,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev    # soft_shadows: command line, JSON report
   clang libclang-rt-14-dev           # the libFuzzer target on the OBJ loader (tests/fuzz)
   libepoxy-dev                       # a second GL loader, for the consumer test
+  libgmp-dev                         # exact rational signs in blocker_filter_test
 )
 
 missing=()

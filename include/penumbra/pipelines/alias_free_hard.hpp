@@ -30,6 +30,7 @@
 #include <penumbra/alias_free_hard/alias_free_hard_shared.h>
 
 #include "penumbra/conservative_raster.hpp"
+#include "penumbra/detail/blocker_filter.hpp"
 #include "penumbra/detail/geometry.hpp"
 #include "penumbra/sample_lists.hpp"
 
@@ -58,6 +59,11 @@ struct AliasFreeHardOptions {
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H (sintorn2008 uses the view size)
     ConservativeVariant variant = ConservativeVariant::Fixed6;
     AfhPrecision precision = AfhPrecision::Exact;
+    /// Exact mode only: run every blocker test in double (true) instead of the float filter with a
+    /// proven error bound that falls back to double where a sign is uncertain (false, default;
+    /// identical results: blocker_test.glsl, detail/blocker_filter.hpp). fp64 runs at 1/32-1/64
+    /// rate on consumer GPUs; on llvmpipe it is nearly free, so there the filter costs ~25%.
+    bool fp64_only = false;
     double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise (~1 ulp)
     float sample_offset = 0.0f;      ///< world units; see the summary (0 = exact geometry)
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
@@ -92,6 +98,7 @@ struct AliasFreeHardFrame {
     uint32_t passes = 0;                    ///< list blocks the GPU drew (<= max_list_blocks)
     uint64_t overflow = 0;                  ///< samples left untested past the last block
     uint64_t fragments = 0, tests = 0, triangles_emitted = 0;  ///< when count_work
+    uint64_t fallbacks = 0;  ///< when count_work, exact filtered mode: blocker tests decided in double
 };
 
 /// p - origin computed in double, then rounded once to float: the camera- or light-relative

@@ -5,6 +5,7 @@
 // with no attachments of the grid's size.
 // penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=1
 // penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=0 PENUMBRA_AFH_SKIP_SHADOWED=0
+// penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_AFH_FILTERED=0 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=1
 // penumbra-permutation: PENUMBRA_AFH_EXACT=0 PENUMBRA_CONSERVATIVE_CLIP_TO_BOX=1 PENUMBRA_AFH_COUNT_WORK=1
 #include "penumbra/alias_free_hard/alias_free_hard_shared.h"
 
@@ -53,29 +54,28 @@ void main() {
     if (!penumbraConservativeInsideBox(gl_FragCoord.xy, penumbraAfhBox)) discard;
 #endif
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
-    const penumbraAfhVec3 a = penumbraAfhVec3(penumbraAfhVertex0);
-    const penumbraAfhVec3 b = penumbraAfhVec3(penumbraAfhVertex1);
-    const penumbraAfhVec3 c = penumbraAfhVec3(penumbraAfhVertex2);
-    const bool point_light = penumbraAfhParams.light.w != 0.0;
-    const penumbraAfhVec3 light = penumbraAfhVec3(penumbraAfhParams.light.xyz);
-    const penumbraAfhReal reach = penumbraAfhReal(penumbraAfhParams.tolerance.z);
-    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);
+    const float reach = penumbraAfhParams.tolerance.z;
+    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
     const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
-    uint tests = 0u;
+    uint tests = 0u, fallbacks = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
 #if PENUMBRA_AFH_SKIP_SHADOWED
         if (penumbraSampleListsShadowBit(slot, 0u)) continue;
 #endif
-        const penumbraAfhVec3 p = penumbraAfhVec3(penumbraSampleListsPosition(slot));
-        // Directional light: the light point on the sample's own ray, `reach` away (exact: the
-        // segment is parallel to the light direction; casters must lie within reach).
-        const penumbraAfhVec3 l = point_light ? light : p + light * reach;
+        const vec3 p = penumbraSampleListsPosition(slot);
         ++tests;
-        if (penumbraAfhBlocks(a, b, c, p, l, eps, offset)) penumbraSampleListsSetShadowBit(slot, 0u);
+        // Directional light: the light point on the sample's own ray, `reach` away (exact: the
+        // segment is parallel to the light direction; casters must lie within reach). Exact mode:
+        // filtered (float with a proven bound, double where uncertain) unless PENUMBRA_AFH_FILTERED 0.
+        if (penumbraAfhBlocksLightCounted(penumbraAfhVertex0, penumbraAfhVertex1, penumbraAfhVertex2, p,
+                                          penumbraAfhParams.light, reach, eps, offset, fallbacks)) {
+            penumbraSampleListsSetShadowBit(slot, 0u);
+        }
     }
 #if PENUMBRA_AFH_COUNT_WORK
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], 1u);
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS], tests);
+    if (fallbacks > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FALLBACKS], fallbacks);
 #endif
 }

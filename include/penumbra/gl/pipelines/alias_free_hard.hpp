@@ -88,6 +88,8 @@ public:
         conservative_ = afhConservativeSetup(options_);
         ShaderDefines defines = conservative_.defines;
         defines.push_back({"PENUMBRA_AFH_EXACT", options_.precision == AfhPrecision::Exact ? "1" : "0"});
+        // blocker_test.glsl: float filter with a proven bound in front of the double test (same bits).
+        defines.push_back({"PENUMBRA_AFH_FILTERED", options_.fp64_only ? "0" : "1"});
         defines.push_back({"PENUMBRA_AFH_COUNT_WORK", options_.count_work ? "1" : "0"});
         defines.push_back({"PENUMBRA_AFH_SKIP_SHADOWED", options_.skip_shadowed ? "1" : "0"});
         const AfhBindings& b = bindings_;
@@ -207,6 +209,7 @@ public:
         f.fragments = work[PENUMBRA_AFH_WORK_FRAGMENTS];
         f.tests = work[PENUMBRA_AFH_WORK_TESTS];
         f.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
+        f.fallbacks = work[PENUMBRA_AFH_WORK_FALLBACKS];
         return f;
     }
 
