@@ -9,7 +9,8 @@
 // give identical verdicts, and the GPU's filter states equal the CPU model's.
 #include <penumbra/detail/blocker_filter.hpp>
 #include <penumbra/gl/shader.hpp>
-#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/objects.hpp>
+#include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/scene/scene.hpp>
 
 #include "support/gl_test_support.hpp"
