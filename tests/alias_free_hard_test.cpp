@@ -425,14 +425,23 @@ TEST_CASE("long lists: blocks decided on the GPU give identical results; past ma
             CHECK(frame.overflow == 0);
             CHECK(states == one_pass);
         } else {
-            // Lists longer than the documented bound: the tail is UNTESTED, counted, and the CPU
-            // twin agrees sample for sample.
+            // Lists longer than the documented bound: the tail is UNTESTED and counted. Which
+            // samples form a list's tail depends on the order inside the list, which GPU atomics
+            // make nondeterministic (the CPU twin orders by sample id): the twin agrees on how
+            // many, and on every sample both decided.
             CHECK(frame.passes == o.max_list_blocks);
             CHECK(frame.overflow > 0);
             penumbra::SampleListsLight fitted = light;
             fitted.view_projection = frame.light_view_projection;
             const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
-            CHECK(states == cpu);
+            size_t gpu_untested = 0, cpu_untested = 0, decided_differ = 0;
+            for (size_t i = 0; i < states.size(); ++i) {
+                gpu_untested += states[i] == PENUMBRA_AFH_UNTESTED;
+                cpu_untested += cpu[i] == PENUMBRA_AFH_UNTESTED;
+                decided_differ += states[i] != cpu[i] && states[i] != PENUMBRA_AFH_UNTESTED && cpu[i] != PENUMBRA_AFH_UNTESTED;
+            }
+            CHECK(gpu_untested == cpu_untested);
+            CHECK(decided_differ == 0);
             size_t untested = 0, changed = 0;
             for (size_t i = 0; i < states.size(); ++i) {
                 untested += states[i] == PENUMBRA_AFH_UNTESTED && one_pass[i] != PENUMBRA_AFH_UNTESTED;

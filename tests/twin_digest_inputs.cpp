@@ -74,14 +74,39 @@ Scene makeScene(uint64_t seed, uint32_t sample_count) {
     return s;
 }
 
+// The light matrices, built here rather than with penumbra::lightViewProjectionForBounds: that
+// inline function is also compiled into the digest TU (with contraction on in one build), and the
+// linker keeps one out-of-line copy for both TUs — the inputs would then differ between builds.
+// glm's small templates inline into this TU (compiled with -ffp-contract=off).
+glm::mat4 lightMatrix(const glm::vec4& l, const glm::vec3& lo, const glm::vec3& hi) {
+    const glm::vec3 center = 0.5f * (lo + hi);
+    const float radius = 0.5f * glm::length(hi - lo);
+    if (l.w == 0.0f) {
+        const glm::vec3 dir = glm::normalize(glm::vec3(l));
+        const glm::vec3 eye = center + dir * (2.0f * radius);
+        return glm::ortho(-radius, radius, -radius, radius, 0.5f * radius, 3.5f * radius) *
+               glm::lookAt(eye, center, glm::vec3(0, 0, 1));
+    }
+    const glm::vec3 eye(l);
+    const float distance = glm::length(center - eye);
+    const float near_plane = std::max(0.5f * (distance - radius), 0.01f);
+    const float fov = 2.0f * std::atan(radius / std::max(distance - radius, 0.25f * radius)) * 1.1f;
+    return glm::perspective(std::min(fov, 2.9f), 1.0f, near_plane, distance + 2.0f * radius) *
+           glm::lookAt(eye, center, glm::vec3(0, 0, 1));
+}
+
 std::vector<penumbra::SampleListsLight> lights(const Scene& scene) {
-    const auto [lo, hi] = penumbra::viewSampleBounds(scene.samples.data(), scene.samples.size());
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (const glm::vec4& p : scene.samples) {
+        lo = glm::min(lo, glm::vec3(p));
+        hi = glm::max(hi, glm::vec3(p));
+    }
     std::vector<penumbra::SampleListsLight> out;
     for (const glm::vec4 l : {glm::vec4(1.5f, 9.0f, -2.0f, 1.0f), glm::vec4(-6.0f, 4.0f, 5.0f, 1.0f),
                               glm::vec4(glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)), 0.0f)}) {
         penumbra::SampleListsLight light;
         light.light = l;
-        light.view_projection = penumbra::lightViewProjectionForBounds(l, lo, hi);
+        light.view_projection = lightMatrix(l, lo, hi);
         out.push_back(light);
     }
     return out;

@@ -735,15 +735,31 @@ inline std::vector<glm::dvec2> conservativeReferencePolygon(const glm::vec4& cli
         for (size_t i = 0; i < poly.size(); ++i) {
             const glm::dvec4& a = poly[(i + poly.size() - 1) % poly.size()];
             const glm::dvec4& b = poly[i];
-            const double da = glm::dot(planes[k], a) + offsets[k], db = glm::dot(planes[k], b) + offsets[k];
+            // Products opaque (detail::conservativeMulRounded): the same bits under any FMA flags.
+            auto side = [&](const glm::dvec4& q) {
+                const glm::dvec4& n = planes[k];
+                double d = detail::conservativeMulRounded(n.x, q.x) + detail::conservativeMulRounded(n.y, q.y);
+                d = d + detail::conservativeMulRounded(n.z, q.z);
+                d = d + detail::conservativeMulRounded(n.w, q.w);
+                return d + offsets[k];
+            };
+            auto along = [](const glm::dvec4& from, double t, const glm::dvec4& to) {
+                const glm::dvec4 d = to - from;
+                return from + glm::dvec4(detail::conservativeMulRounded(t, d.x), detail::conservativeMulRounded(t, d.y),
+                                         detail::conservativeMulRounded(t, d.z), detail::conservativeMulRounded(t, d.w));
+            };
+            const double da = side(a), db = side(b);
             // Intersections from the kept end, so their error scales with the kept coordinates.
-            if (da >= 0 && db < 0) next.push_back(a + (da / (da - db)) * (b - a));
-            if (da < 0 && db >= 0) next.push_back(b + (db / (db - da)) * (a - b));
+            if (da >= 0 && db < 0) next.push_back(along(a, da / (da - db), b));
+            if (da < 0 && db >= 0) next.push_back(along(b, db / (db - da), a));
             if (db >= 0) next.push_back(b);
         }
         poly.swap(next);
     }
-    for (const auto& c : poly) out.emplace_back((c.x / c.w + 1.0) * 0.5 * w, (c.y / c.w + 1.0) * 0.5 * h);
+    for (const auto& c : poly) {
+        out.emplace_back(detail::conservativeMulRounded((c.x / c.w + 1.0) * 0.5, w),
+                         detail::conservativeMulRounded((c.y / c.w + 1.0) * 0.5, h));
+    }
     return out;
 }
 

@@ -183,6 +183,18 @@ class Assembler {
 public:
     explicit Assembler(const ShaderLibrary& library) : library_(library) {}
 
+    /// The pasted text of `key` and its includes, without #version, #extension or defines
+    /// (assembleSnippet); `extensions` receives the #extension lines the files ask for.
+    ShaderAssembly flatten(const std::string& key, std::string& extensions) {
+        std::string body;
+        paste(key, body, 0, key);
+        PENUMBRA_CHECK(version_.empty(), "penumbra: '", key, "' has #version: it is an entry shader, not a snippet "
+                                         "(assembleShader builds entries)");
+        extensions.clear();
+        for (const auto& ext : extensions_) extensions += ext + "\n";
+        return ShaderAssembly{std::move(body), std::move(files_)};
+    }
+
     ShaderAssembly run(const std::string& key, const ShaderDefines& defines) {
         std::string body;
         paste(key, body, 0, key);
@@ -255,6 +267,25 @@ private:
 };
 
 }  // namespace detail
+
+/// A snippet flattened for pasting into your own shader text (ShaderSnippet::text has every
+/// `#include "penumbra/..."` pasted, each file once, with `#line L F` markers; no #version and no
+/// defines). Put `extensions` right after your own #version line, then your hook #defines, then
+/// `text`. Throws penumbra::Error when `key` is an entry shader (it has #version) or on the
+/// errors of assembleShader.
+struct ShaderSnippet {
+    std::string extensions;          ///< the #extension lines the files ask for, one per line
+    std::string text;                ///< the pasted snippet
+    std::vector<std::string> files;  ///< source-string numbers of the #line markers
+};
+
+inline ShaderSnippet assembleSnippet(const std::string& key, const ShaderLibrary& library = ShaderLibrary::embedded()) {
+    ShaderSnippet out;
+    ShaderAssembly a = detail::Assembler(library).flatten(key, out.extensions);
+    out.text = std::move(a.text);
+    out.files = std::move(a.files);
+    return out;
+}
 
 /// Assembles `key` from `library` (see the summary at the top of this file). Throws
 /// penumbra::Error on a missing file, an include cycle, #version in a snippet or a bad define.
