@@ -1,35 +1,36 @@
-// penumbra — view-sample lists per light texel (sintorn2008 §3, §3.1, §4.3, Fig. 2, 3, 9).
+// penumbra — view-sample lists per light texel (sintorn2008 §3, §3.1, §4.3, Fig. 2, 3, 9): the
+// GL-free part — pure setup, the rules, the CPU twin. The GL executor (SampleListBuilder, its
+// bindings, buffers and GL state contract) is penumbra/gl/sample_lists.hpp.
 //
 // Integration summary
-//   needs:    a GL 4.5 context (compute shaders, SSBOs); PENUMBRA_GL_HEADER (see gl/gl.hpp); the
-//             scan block (penumbra/scan.hpp) for pass 2; shaders from the embedded table or a
-//             ShaderLibrary you pass in.
-//   input:    view samples, either a buffer of vec4 world positions (w == 0 marks "no sample") or
-//             the view's depth texture + inverse view-projection; world normals (buffer or
-//             texture) for the light-facing test; the light's view-projection and grid W x H; the
-//             light as vec4 (w = 1: xyz = position; w = 0: xyz = direction towards the light).
+//   input:    view samples, either vec4 world positions (w == 0 marks "no sample") or the view's
+//             depth + inverse view-projection; world normals for the light-facing test; the light's
+//             view-projection and grid W x H; the light as vec4 (w = 1: xyz = position; w = 0:
+//             xyz = direction towards the light).
 //   produces: per light texel a list of the samples that project into it (§3.1): counts (list
 //             lengths), offsets (exclusive scan of counts), list positions (vec4) and sample ids
 //             (uint) stored structure-of-arrays by slot; per sample its slot (or NO_SLOT) and its
-//             texel (or REJECTED + reason); counters by rejection reason; on request the §4.3
-//             fitted light frustum and the Fig. 9 list statistics.
+//             texel (or REJECTED + reason); counters by rejection reason; the §4.3 fitted light
+//             frustum (a SampleListsFrustum block: on the GPU it never leaves the GPU) and the
+//             Fig. 9 list statistics.
 //   GLSL:     penumbra/sample_lists/sample_lists.glsl walks a texel's list from the integrator's
 //             own light pass and penumbra/sample_lists/shadow_bits.glsl addresses the packed
 //             per-sample shadow bits; both read the integrator's buffers through hooks. Walk long
 //             lists in blocks over several passes (penumbraSampleListsBlock, §3.1 multi-pass):
 //             llvmpipe ends an invocation's loops after 65 535 iterations in total. The shadow
 //             bits (shadowBitsBytes) are the integrator's buffer; it clears them before its pass.
-//   passes:   1 count (count.comp.glsl: classify, atomicAdd on the texel counter = local index),
-//             2 exclusive scan of the W*H counters (penumbra::Scanner), 3 scatter
-//             (scatter.comp.glsl: slot = offset + local index). Optional: fit.comp.glsl (§4.3)
-//             and statistics.comp.glsl (Fig. 9).
-//   CPU twin: buildSampleListsCpu (counting sort), fitLightFrustumCpu, sampleListStatisticsCpu
-//             compute the identical structure, fit and statistics.
+//   passes:   optional §4.3 fit (fit.comp.glsl reduces keys, fit_resolve.comp.glsl turns them into
+//             the frustum block), 1 count (count.comp.glsl: classify, atomicAdd on the texel counter
+//             = local index), 2 exclusive scan of the W*H counters (the scan block), 3 scatter
+//             (scatter.comp.glsl: slot = offset + local index), optional statistics (Fig. 9).
+//   CPU twin: buildSampleListsCpu (counting sort), fitLightFrustumCpu / lightFrustumFitFromHeader,
+//             sampleListStatisticsCpu compute the identical structure, frustum and statistics.
 //
-// Pure setup (no GL): sampleListsSetup() validates the grid and the sample count and says how many
-// bytes every buffer needs; sampleListsParams() builds the uniform block; shadowBitsBytes() sizes
-// the shadow bits. The caller owns every buffer and texture; SampleListBuilder owns only its
-// programs, a 176-byte uniform buffer and the Scanner (and the Scanner's scratch).
+// Pure setup: sampleListsSetup() validates the grid and the sample count and says how many bytes
+// every buffer needs; sampleListsParams() builds the 256-byte uniform block (throwing on bad
+// numbers; the executor's per-frame path uses the non-throwing detail::sampleListsParamsValid);
+// sampleListsFrustum() is the frustum block of an unfitted build; shadowBitsBytes() sizes the
+// shadow bits.
 //
 // Rules (identical on GPU and CPU)
 //   Projection: t = T * (p, 1) with T = bias * light view-projection (T maps the frustum to
@@ -53,17 +54,6 @@
 //     (id, position) per list, and every sample's slot pointing at its own id.
 //   Sample ids: the buffer index, or y * view width + x for the depth input (row 0 = bottom).
 //
-// GL state contract (SampleListBuilder)
-//   Changes, without restoring: the current program, GL_UNIFORM_BUFFER binding 0,
-//   GL_SHADER_STORAGE_BUFFER bindings 0-7, for the depth input texture units 0 and 1 (and the
-//   sampler objects bound there: set to 0), plus whatever penumbra::Scanner binds.
-//   Barriers: issues GL_SHADER_STORAGE_BARRIER_BIT between its passes and, before returning,
-//   GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT, so the integrator's shaders
-//   can read the lists through SSBOs and the host can read them back. Inputs written by shaders
-//   need the caller's barrier first (e.g. GL_SHADER_STORAGE_BARRIER_BIT,
-//   GL_TEXTURE_FETCH_BARRIER_BIT); a depth texture rendered through a framebuffer needs none.
-//   Textures of the depth input: GL_TEXTURE_2D, level 0 read with texelFetch, compare mode
-//   GL_NONE; bit-exact CPU agreement needs GL_DEPTH_COMPONENT32F (or the values read back).
 #ifndef PENUMBRA_SAMPLE_LISTS_HPP
 #define PENUMBRA_SAMPLE_LISTS_HPP
 

@@ -1,0 +1,56 @@
+// Every block's GL-free header (pure setup, plans, CPU twins; docs/design.md convention 1) and the
+// oracle compile and run with no GL header anywhere in the translation unit — this target has no
+// GL loader on its include path, and a GL header slipping in is an #error. (The conservative
+// raster header has its own, stricter test: conservative_raster_no_gl_test.)
+#include <penumbra/buffer_range.hpp>
+#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/reference/compare.hpp>
+#include <penumbra/reference/light_samples.hpp>
+#include <penumbra/reference/visibility.hpp>
+#include <penumbra/sample_lists.hpp>
+#include <penumbra/scan.hpp>
+
+#if defined(GL_VERSION_1_0) || defined(__gl_h_) || defined(__glad_h_) || defined(GLAD_GL_H_) || \
+    defined(__gl_glcorearb_h_) || defined(__glext_h_) || defined(__gl_glext_h_) || defined(__EPOXY_GL_H) || \
+    defined(PENUMBRA_GL_GL_HPP)
+#error a GL-free penumbra header pulled in a GL header
+#endif
+
+#include <doctest/doctest.h>
+
+#include <string>
+#include <vector>
+
+TEST_CASE("cpu: the GL-free headers plan, validate and run their CPU twins without GL") {
+    // Scan: the plan an RHI records, and the twin.
+    const penumbra::ScanPlan plan = penumbra::planScan(1u << 20);
+    CHECK(plan.dispatches > 0);
+    const uint32_t in[5] = {1, 2, 3, 4, 5};
+    uint32_t out[5] = {};
+    penumbra::scanCpu(in, out, 5, penumbra::ScanKind::Inclusive);
+    CHECK(out[4] == 15u);
+    // Sample lists: setup, parameter block, twin.
+    const penumbra::SampleListsSetup setup = penumbra::sampleListsSetup(8, 8, 2);
+    penumbra::SampleListsLight light;
+    light.light = glm::vec4(0, 5, 0, 1);
+    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, glm::vec3(-1, 0, -1), glm::vec3(1, 0, 1));
+    const std::vector<glm::vec4> positions = {{0, 0, 0, 1}, {0.5f, 0, 0.5f, 1}}, normals = {{0, 1, 0, 0}, {0, 1, 0, 0}};
+    const penumbra::SampleListsCpu lists = penumbra::buildSampleListsCpu(setup, light, positions.data(), normals.data());
+    CHECK(lists.header.accepted == 2u);
+    // The hard-shadow twin with a caster over the first sample, and the oracle agreeing.
+    const std::vector<glm::vec3> vertices = {{-0.2f, 1, -0.2f}, {0.2f, 1, -0.2f}, {0, 1, 0.3f}};
+    const std::vector<uint32_t> indices = {0, 1, 2};
+    const std::vector<uint8_t> closed = {0};
+    penumbra::AliasFreeHardOptions options;
+    options.grid_width = options.grid_height = 8;
+    const std::vector<uint32_t> states = penumbra::aliasFreeHardCpu(options, light, positions.data(), normals.data(), 2,
+                                                                    {&vertices, &indices, &closed});
+    CHECK(states[0] == PENUMBRA_AFH_SHADOWED);
+    CHECK(states[1] == PENUMBRA_AFH_LIT);
+    const penumbra::reference::VisibilityOracle oracle(vertices, indices);
+    const auto c = penumbra::reference::compareHardStates(oracle, positions, states, penumbra::reference::hardLight(light.light));
+    CHECK(c.mismatched == 0);
+    CHECK(c.samples == 2);
+    // Status is plain C++ too.
+    CHECK(std::string(penumbra::statusName(penumbra::Status::RangeTooSmall)) == "range too small");
+}
