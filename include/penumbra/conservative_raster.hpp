@@ -60,6 +60,7 @@
 #ifndef PENUMBRA_CONSERVATIVE_RASTER_HPP
 #define PENUMBRA_CONSERVATIVE_RASTER_HPP
 
+#include "penumbra/detail/float_ops.hpp"
 #include "penumbra/detail/shared.hpp"
 #include "penumbra/error.hpp"
 #include "penumbra/shader_defines.hpp"
@@ -325,18 +326,9 @@ inline int conservativeEdgeCorner(glm::vec2 d) {
     return 3;
 }
 
-/// a * b rounded to float and kept opaque, so the compiler cannot contract it with a following
-/// add into an FMA (GCC contracts across statements with -mfma / -march=native); the GLSL side
-/// uses `precise` for the same reason.
-inline float conservativeMulRounded(float a, float b) {
-    float r = a * b;
-#if defined(__GNUC__) && defined(__x86_64__)
-    __asm__("" : "+x"(r));
-#elif defined(__GNUC__) && defined(__aarch64__)
-    __asm__("" : "+w"(r));
-#endif
-    return r;
-}
+/// a * b rounded and kept opaque (detail/float_ops.hpp), so the compiler cannot contract it with a
+/// following add into an FMA; the GLSL side uses `precise` for the same reason.
+inline float conservativeMulRounded(float a, float b) { return mulRounded(a, b); }
 
 inline float conservativeCross(glm::vec2 a, glm::vec2 b) {
     return conservativeMulRounded(a.x, b.y) - conservativeMulRounded(a.y, b.x);
@@ -355,15 +347,7 @@ inline bool conservativeVertexInside(const glm::vec4& c, const shared::PenumbraC
            std::abs(c.x) <= p.clipping.y * c.w && std::abs(c.y) <= p.clipping.z * c.w;
 }
 
-inline double conservativeMulRounded(double a, double b) {
-    double r = a * b;
-#if defined(__GNUC__) && defined(__x86_64__)
-    __asm__("" : "+x"(r));
-#elif defined(__GNUC__) && defined(__aarch64__)
-    __asm__("" : "+w"(r));
-#endif
-    return r;
-}
+inline double conservativeMulRounded(double a, double b) { return mulRounded(a, b); }
 
 // Mirrors penumbraConservativePlane (left to right, every product rounded).
 inline double conservativePlane(int i, const glm::dvec4& c, const shared::PenumbraConservativeParams& p) {

@@ -62,6 +62,8 @@
 #ifndef PENUMBRA_DETAIL_BLOCKER_FILTER_HPP
 #define PENUMBRA_DETAIL_BLOCKER_FILTER_HPP
 
+#include "penumbra/detail/float_ops.hpp"
+
 #include <glm/common.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -90,13 +92,7 @@ inline constexpr float kBlockerFilterMaxDifference = 1.0e12f;
 /// writes `precise` for the same reason.
 template <typename Real>
 inline Real blockerFilterMul(Real a, Real b) {
-    Real r = a * b;
-#if defined(__GNUC__) && defined(__x86_64__)
-    __asm__("" : "+x"(r));
-#elif defined(__GNUC__) && defined(__aarch64__)
-    __asm__("" : "+w"(r));
-#endif
-    return r;
+    return mulRounded(a, b);  // detail/float_ops.hpp
 }
 
 inline float blockerFilterMaxAbs(const glm::vec3& v) {
