@@ -28,6 +28,13 @@ inline bool& timeElapsedMeasures() {
     static bool measures = false;
     return measures;
 }
+struct LastTiming {
+    double wall = 0.0, query = 0.0;  ///< seconds
+};
+inline LastTiming& lastTiming() {
+    static LastTiming last;
+    return last;
+}
 }  // namespace detail
 
 /// GPU seconds of `f`, the one timing method of every GL benchmark: a GL_TIME_ELAPSED query
@@ -54,11 +61,19 @@ double timeGpu(F&& f) {
     glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
     const double measured = double(ns) * 1e-9;
     detail::timeElapsedMeasures() = measured >= 0.05 * wall && measured <= 1.02 * wall;
+    detail::lastTiming() = {wall, measured};
     return detail::timeElapsedMeasures() ? measured : wall;
 }
 
 /// Counter value for "timer_gl_time_elapsed": 1 when timeGpu used the GL query, 0 for glFinish + wall clock.
 inline double timerCounter() { return detail::timeElapsedMeasures() ? 1.0 : 0.0; }
+
+/// Both readings of the last timeGpu call (seconds): the glFinish-to-glFinish wall time and what
+/// the GL_TIME_ELAPSED query answered (whether or not timeGpu used it). For entries that must time
+/// several methods the same way: when one call's query does not measure, use lastWallSeconds()
+/// for every method of the entry.
+inline double lastWallSeconds() { return detail::lastTiming().wall; }
+inline double lastQuerySeconds() { return detail::lastTiming().query; }
 
 }  // namespace penumbra::bench
 
