@@ -6,6 +6,7 @@
 #include "penumbra/detail/float_ops.hpp"
 
 #include <glm/geometric.hpp>
+#include <algorithm>
 #include <glm/vec3.hpp>
 
 namespace penumbra::detail {
@@ -48,6 +49,21 @@ Real pointTriangleDistance2(const glm::tvec3<Real>& p, const glm::tvec3<Real>& a
         }
     }
     return dotRounded(d, d);
+}
+
+/// The one degenerate-triangle rule of the oracle, the CPU twins and the GPU
+/// (penumbraAfhDegenerate in blocker_test.glsl): |(v1 - v0) x (v2 - v0)| <= 1e-12 * (longest
+/// edge)^2, compared squared, in double, products opaque. A degenerate triangle never blocks and is
+/// never a tie (the oracle drops it at construction; the light pass discards its fragments).
+inline constexpr double kDegenerateRelativeArea = 1e-12;
+
+inline bool degenerateTriangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2) {
+    const glm::dvec3 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2, e02 = v2 - v0;
+    const double longest2 = std::max(dotRounded(e0, e0), std::max(dotRounded(e1, e1), dotRounded(e2, e2)));
+    const glm::dvec3 n(mulRounded(e0.y, e02.z) - mulRounded(e02.y, e0.z), mulRounded(e0.z, e02.x) - mulRounded(e02.z, e0.x),
+                       mulRounded(e0.x, e02.y) - mulRounded(e02.x, e0.y));
+    const double limit = mulRounded(kDegenerateRelativeArea, longest2);
+    return dotRounded(n, n) <= mulRounded(limit, limit);
 }
 
 }  // namespace penumbra::detail

@@ -324,6 +324,8 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
     const auto& I = *casters.indices;
     for (size_t t = 0; t < casters.closed->size(); ++t) {
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
+        // The shared degenerate-triangle rule (the oracle drops these; the light pass discards them).
+        if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
         if ((*casters.closed)[t] && options.back_faces_only) {
             const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
             const glm::dvec3 to_light = point ? lpos - a : lpos;

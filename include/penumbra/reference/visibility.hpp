@@ -81,7 +81,8 @@
 // the triangle's box grown by 1e-12 of its scale (rule 4's closest-hit form). u and v are the
 // barycentric weights of v1 and v2.
 //
-// Degenerate triangles: a triangle with |(v1 - v0) x (v2 - v0)| <= 1e-12 * (longest edge)^2
+// Degenerate triangles (penumbra::detail::degenerateTriangle, the rule the CPU twins and the GPU
+// light pass share): a triangle with |(v1 - v0) x (v2 - v0)| <= 1e-12 * (longest edge)^2 (compared squared)
 // (zero area, repeated or collinear vertices, or slivers thinner than 1e-12 of their length) is
 // dropped at construction: it never blocks and is never a tie. degenerateTriangleCount() tells
 // how many. Triangle ids (Hit::triangle) always refer to the caller's triangle list.
@@ -181,7 +182,6 @@ namespace detail {
 namespace oracle {
 
 inline constexpr double kBoxSlack = 1e-12;                // >> the ~20 ulp error of one test
-inline constexpr double kDegenerateRelativeArea = 1e-12;  // |n| <= k * longest_edge^2 -> dropped
 inline constexpr double kParallelRay = 1e-12;             // closest hit: |n.d| <= k |n| |d| -> edge-on
 inline constexpr double kMaxCoordinate = 1e50;            // squares of squares stay finite
 inline constexpr double kMaxEpsilon = 0.1;
@@ -834,11 +834,8 @@ private:
         for (size_t i = 0; i < triangle_count_; ++i) {
             const oracle::Triangle tri{positions[indices[3 * i]], positions[indices[3 * i + 1]],
                                        positions[indices[3 * i + 2]], static_cast<uint32_t>(i)};
-            const glm::dvec3 e0 = tri.v1 - tri.v0, e1 = tri.v2 - tri.v1, e2 = tri.v0 - tri.v2;
-            const double longest2 =
-                std::max(oracle::dot3(e0, e0), std::max(oracle::dot3(e1, e1), oracle::dot3(e2, e2)));
-            const double twice_area = oracle::length3(oracle::cross3(e0, tri.v2 - tri.v0));
-            if (twice_area <= oracle::kDegenerateRelativeArea * longest2) continue;
+            // The one degenerate-triangle rule (detail/geometry.hpp), shared with the twins and the GPU.
+            if (penumbra::detail::degenerateTriangle(tri.v0, tri.v1, tri.v2)) continue;
             triangles.push_back(tri);
         }
         linear_ = triangles;  // caller order, for the brute-force paths
