@@ -22,6 +22,9 @@
 //               fit + lists + light pass + resolve, W x W view and W x W light grid (the G-buffer
 //               render is excluded: every method shares it).
 //   hard_fp64   the same with AliasFreeHardOptions::fp64_only = true (every blocker test in double).
+//   hard_back_faces  the exact pipeline with back_faces_only = true (sintorn2008 §3.3: closed casters
+//               cast only light-back-facing triangles); back_faces_over_all = its time / hard's,
+//               err_mismatch_back_faces its disagreement with the oracle on T.
 //   fast        the same with AfhPrecision::Fast (float planes, no offset).
 //   map<res>    a res^2 GL_DEPTH_COMPONENT32F map rendered from the pipeline's fitted light matrix
 //               (the tightest frustum a shadow map could get), every mesh, no culling,
@@ -248,11 +251,13 @@ struct Fixture {
         facing = subsetReference(all, facing_ids);
     }
 
-    penumbra::AliasFreeHardOptions options(penumbra::AfhPrecision precision, bool fp64_only) const {
+    penumbra::AliasFreeHardOptions options(penumbra::AfhPrecision precision, bool fp64_only,
+                                           bool back_faces_only = false) const {
         penumbra::AliasFreeHardOptions o;
         o.grid_width = o.grid_height = size;  // sintorn2008: the light grid has the view's size
         o.precision = precision;
         o.fp64_only = fp64_only;
+        o.back_faces_only = back_faces_only;
         return o;
     }
     penumbra::SampleBufferInput input() const {
@@ -395,8 +400,8 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         const uint32_t n = f.samples();
 
         // Load time (untimed): every method's objects, reserved and validated.
-        auto makePipeline = [&](penumbra::AfhPrecision precision, bool fp64_only) {
-            penumbra::AliasFreeHardShadows p(f.options(precision, fp64_only));
+        auto makePipeline = [&](penumbra::AfhPrecision precision, bool fp64_only, bool back_faces_only = false) {
+            penumbra::AliasFreeHardShadows p(f.options(precision, fp64_only, back_faces_only));
             p.reserve(n);
             p.validate(f.input(), n);
             return p;
@@ -404,6 +409,8 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         penumbra::AliasFreeHardShadows hard = makePipeline(penumbra::AfhPrecision::Exact, false);
         penumbra::AliasFreeHardShadows hard_fp64 = makePipeline(penumbra::AfhPrecision::Exact, true);
         penumbra::AliasFreeHardShadows fast = makePipeline(penumbra::AfhPrecision::Fast, false);
+        // §3.3: closed casters cast only light-back-facing triangles (an option; off by default).
+        penumbra::AliasFreeHardShadows back_faces = makePipeline(penumbra::AfhPrecision::Exact, false, true);
         std::vector<std::unique_ptr<ShadowMap>> maps;
         for (uint32_t res : shadowMapSizes()) maps.push_back(std::make_unique<ShadowMap>(f, res));
 
@@ -417,6 +424,7 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         methods.push_back({"hard", pipelineRun(hard), {}, {}});
         methods.push_back({"hard_fp64", pipelineRun(hard_fp64), {}, {}});
         methods.push_back({"fast", pipelineRun(fast), {}, {}});
+        methods.push_back({"hard_back_faces", pipelineRun(back_faces), {}, {}});
         for (const auto& m : maps) {
             const ShadowMap* map = m.get();
             methods.push_back({"map" + std::to_string(map->resolution()), [map] { map->run(); }, {}, {}});
@@ -462,12 +470,14 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         }
         state.counters["filtered_over_fp64"] = ratio(ms("hard"), ms("hard_fp64"));
         state.counters["fast_over_exact"] = ratio(ms("fast"), ms("hard"));
+        state.counters["back_faces_over_all"] = ratio(ms("hard_back_faces"), ms("hard"));
         state.counters["timer_gl_time_elapsed"] = query_measures ? 1.0 : 0.0;
 
         // Read-backs and errors (after the timed runs: the last iteration's results).
         const std::vector<uint32_t> hard_states = hard.stateBuffer().download<uint32_t>(0, n);
         const std::vector<uint32_t> fp64_states = hard_fp64.stateBuffer().download<uint32_t>(0, n);
         const std::vector<uint32_t> fast_states = fast.stateBuffer().download<uint32_t>(0, n);
+        const std::vector<uint32_t> back_faces_states = back_faces.stateBuffer().download<uint32_t>(0, n);
         // Per sample id (the shadow-bit words are per list slot, and a list's slot order follows
         // the scatter's atomics, so two runs' words may be permuted; the states are the resolved bits).
         state.counters["same_bits_fp64"] = hard_states == fp64_states ? 1.0 : 0.0;
@@ -479,6 +489,9 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         state.counters["ties"] = double(exact.ties);
         state.counters["err_mismatch_fp64"] = ref::compareHardStates(f.tested, fp64_states).mismatchRate();
         state.counters["err_mismatch_fast"] = ref::compareHardStates(f.tested, fast_states).mismatchRate();
+        const ref::HardComparison back = ref::compareHardStates(f.tested, back_faces_states);
+        state.counters["err_mismatch_back_faces"] = back.mismatchRate();
+        state.counters["err_mismatch_back_faces_count"] = double(back.mismatched);
         for (const auto& c : exact.first_mismatches) {
             std::fprintf(stderr, "alias_free_hard_bench %s: mismatch at sample %u (%.9g, %.9g, %.9g): pipeline %d oracle %d\n",
                          spec.name.c_str(), c.sample, c.position.x, c.position.y, c.position.z, int(c.shadowed), int(c.blocked));
@@ -492,6 +505,7 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         setDark("hard", dark_hard);
         setDark("hard_fp64", f.compareDark(fp64_states));
         setDark("fast", f.compareDark(fast_states));
+        setDark("hard_back_faces", f.compareDark(back_faces_states));
         for (const auto& m : maps) {
             const DarkComparison d = f.compareDark(m->states());
             const std::string name = "map" + std::to_string(m->resolution());
