@@ -381,6 +381,11 @@ TEST_CASE("§3.3 back faces only vs every face cast, at the demo's 512x384") {
         const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
         const auto frame = pipeline.readFrame();
         const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f);
+        // The spill count follows the class culling (the direct pass culls before it spills).
+        penumbra::SampleListsLight fitted = light;
+        fitted.view_projection = frame.light_view_projection;
+        CHECK(frame.spilled == penumbra::afhSpilledTriangles(o, fitted, f.casters()));
+        CHECK(frame.spill_overflow == 0);
         MESSAGE("torus_knot 512x384, back_faces_only=", back_faces_only, ": ", c.tested, " samples, mismatched ",
                 c.mismatched, ", ties ", c.ties, ", triangles emitted ", frame.triangles_emitted, ", tests ", frame.tests);
         // §3.3 (back faces only) misses samples exactly in concave creases lit at a grazing angle:
@@ -444,7 +449,22 @@ TEST_CASE("long lists: blocks decided on the GPU give identical results; past ma
             penumbra::SampleListsLight fitted = light;
             fitted.view_projection = frame.light_view_projection;
             const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
-            CHECK(states == cpu);
+            // Which samples of a list fall past the last block depends on the list order, which the
+            // GPU takes from atomics (nondeterministic; the twin orders by id: sample_lists.hpp).
+            // Deterministic: every sample both sides tested has the same state, and each side
+            // leaves the same number untested.
+            size_t both_tested_differ = 0, gpu_untested = 0, cpu_untested = 0, order_only = 0;
+            for (size_t i = 0; i < states.size(); ++i) {
+                const bool gu = states[i] == PENUMBRA_AFH_UNTESTED, cu = cpu[i] == PENUMBRA_AFH_UNTESTED;
+                gpu_untested += gu;
+                cpu_untested += cu;
+                order_only += gu != cu;
+                both_tested_differ += !gu && !cu && states[i] != cpu[i];
+            }
+            MESSAGE("GPU vs CPU twin: ", order_only, " samples untested on one side only (list order), ",
+                    both_tested_differ, " tested on both sides and different");
+            CHECK(both_tested_differ == 0);
+            CHECK(gpu_untested == cpu_untested);
             size_t untested = 0, changed = 0;
             for (size_t i = 0; i < states.size(); ++i) {
                 untested += states[i] == PENUMBRA_AFH_UNTESTED && one_pass[i] != PENUMBRA_AFH_UNTESTED;

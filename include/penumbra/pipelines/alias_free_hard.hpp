@@ -20,6 +20,13 @@
 // world origin use a camera- or light-relative frame — subtract a double origin on the host
 // (relativePosition) before anything becomes float; floats of 1e6-sized coordinates carry
 // only ~0.06 units of precision, and no exact test can recover what the rounding lost.
+// Light pass (ConservativeVariant::Fixed6, the default): the casters' geometry stage declares the
+// seed's max_vertices = 6 (sintorn2008 §3.2); triangles that need clipping (they cross the light's
+// eye plane w = min_w or the guard band: 0-18 per run in the tests) go to a spill pass drawn
+// indirectly at max_vertices 13 — the same fragments and states as one pass at 13. Its buffers hold
+// spill_capacity triangles (default: max_caster_triangles, else 65 536); a triangle past that is
+// not rasterized and counted (AliasFreeHardFrame::spill_overflow): results are exact only when it
+// is 0. fixed6_two_pass = false keeps the single pass; ConservativeVariant::Exact always has one.
 // Point lights: all samples must lie in front of the light (one frustum; a light inside the
 // scene needs one pipeline run per cube face). Directional lights: each sample's light point is
 // taken `directional_reach` along the light direction: exact for casters within that distance.
