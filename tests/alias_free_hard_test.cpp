@@ -1,7 +1,9 @@
 // Alias-free hard shadows (sintorn2008 §3): the blocker test against the oracle on adversarial
 // pairs, the GPU pipeline against its CPU twin (bit for bit) and against the exact oracle (0
 // mismatches outside reported ties) on every built-in scene and spot.obj with several lights,
-// the skips proven bit-identical, multi-pass list blocks, and bad input.
+// the skips proven bit-identical, multi-pass list blocks, and bad input. The Fixed-6 light pass's
+// two-pass plan: the casters' geometry stage declares max_vertices 6, casters crossing the light's
+// eye plane go through the spill pass with the Exact variant's states, overflow is reported.
 #include "support/gl_test_support.hpp"
 
 #include <penumbra/gl/headless.hpp>
@@ -17,6 +19,7 @@
 #include <filesystem>
 #include <memory>
 #include <random>
+#include <string>
 
 namespace {
 
@@ -225,7 +228,8 @@ TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions
         for (auto variant : {penumbra::ConservativeVariant::Fixed6, penumbra::ConservativeVariant::Exact}) {
             for (auto precision : {penumbra::AfhPrecision::Exact, penumbra::AfhPrecision::Fast}) {
                 for (int skips = 0; skips < 2; ++skips) {
-                    CAPTURE(viewSamplesName(v));
+                    const std::string input = viewSamplesName(v);
+                    CAPTURE(input);
                     CAPTURE(int(variant));
                     CAPTURE(int(precision));
                     CAPTURE(skips);
@@ -308,7 +312,8 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
             const auto light = pointLight(f, position);
             for (ViewSamples v : {ViewSamples::Exact, ViewSamples::Depth}) {
                 CAPTURE(name);
-                CAPTURE(viewSamplesName(v));
+                const std::string input = viewSamplesName(v);
+                CAPTURE(input);
                 penumbra::AliasFreeHardOptions o;
                 o.grid_width = size;
                 o.grid_height = height;
@@ -316,9 +321,16 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                 const auto states = runPipeline(pipeline, f, light, v);
                 // Exactness: the oracle on the very same float positions the GPU tested.
                 const Comparison c = compareWithOracle(f, f.tested(v), light, states, o.coplanar_epsilon, 0.0f);
-                MESSAGE(name, " ", viewSamplesName(v), " light (", position.x, ", ", position.y, ", ", position.z, "): ",
+                // The Fixed-6 two-pass light pass (default): the triangles that need clipping went
+                // through the spill pass, none was lost.
+                const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
+                penumbra::SampleListsLight fitted = light;
+                fitted.view_projection = frame.light_view_projection;
+                CHECK(frame.spilled == penumbra::afhSpilledTriangles(o, fitted, f.casters()));
+                CHECK(frame.spill_overflow == 0);
+                MESSAGE(name, " ", input, " light (", position.x, ", ", position.y, ", ", position.z, "): ",
                         c.tested, " samples, ", c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties,
-                        " (back-facing ", c.back_facing, ", untested ", c.untested, ")");
+                        " (back-facing ", c.back_facing, ", untested ", c.untested, "), spilled ", frame.spilled);
                 CHECK(c.tested > size * height / 8);
                 CHECK(c.untested == 0);
                 CHECK(c.mismatched == 0);
@@ -369,6 +381,11 @@ TEST_CASE("§3.3 back faces only vs every face cast, at the demo's 512x384") {
         const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
         const auto frame = pipeline.readFrame();
         const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f);
+        // The spill count follows the class culling (the direct pass culls before it spills).
+        penumbra::SampleListsLight fitted = light;
+        fitted.view_projection = frame.light_view_projection;
+        CHECK(frame.spilled == penumbra::afhSpilledTriangles(o, fitted, f.casters()));
+        CHECK(frame.spill_overflow == 0);
         MESSAGE("torus_knot 512x384, back_faces_only=", back_faces_only, ": ", c.tested, " samples, mismatched ",
                 c.mismatched, ", ties ", c.ties, ", triangles emitted ", frame.triangles_emitted, ", tests ", frame.tests);
         // §3.3 (back faces only) misses samples exactly in concave creases lit at a grazing angle:
@@ -434,14 +451,22 @@ TEST_CASE("long lists: blocks decided on the GPU give identical results; past ma
             penumbra::SampleListsLight fitted = light;
             fitted.view_projection = frame.light_view_projection;
             const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
-            size_t gpu_untested = 0, cpu_untested = 0, decided_differ = 0;
+            // Which samples of a list fall past the last block depends on the list order, which the
+            // GPU takes from atomics (nondeterministic; the twin orders by id: sample_lists.hpp).
+            // Deterministic: every sample both sides tested has the same state, and each side
+            // leaves the same number untested.
+            size_t both_tested_differ = 0, gpu_untested = 0, cpu_untested = 0, order_only = 0;
             for (size_t i = 0; i < states.size(); ++i) {
-                gpu_untested += states[i] == PENUMBRA_AFH_UNTESTED;
-                cpu_untested += cpu[i] == PENUMBRA_AFH_UNTESTED;
-                decided_differ += states[i] != cpu[i] && states[i] != PENUMBRA_AFH_UNTESTED && cpu[i] != PENUMBRA_AFH_UNTESTED;
+                const bool gu = states[i] == PENUMBRA_AFH_UNTESTED, cu = cpu[i] == PENUMBRA_AFH_UNTESTED;
+                gpu_untested += gu;
+                cpu_untested += cu;
+                order_only += gu != cu;
+                both_tested_differ += !gu && !cu && states[i] != cpu[i];
             }
+            MESSAGE("GPU vs CPU twin: ", order_only, " samples untested on one side only (list order), ",
+                    both_tested_differ, " tested on both sides and different");
+            CHECK(both_tested_differ == 0);
             CHECK(gpu_untested == cpu_untested);
-            CHECK(decided_differ == 0);
             size_t untested = 0, changed = 0;
             for (size_t i = 0; i < states.size(); ++i) {
                 untested += states[i] == PENUMBRA_AFH_UNTESTED && one_pass[i] != PENUMBRA_AFH_UNTESTED;
@@ -638,4 +663,218 @@ TEST_CASE("bad input: setup throws naming the value, run() returns a Status") {
     point.light.x = 0;
     CHECK(moved.run(input, 1, point, nothing) == Status::Ok);
     penumbra::gl::checkErrors("bad input");
+}
+
+
+namespace {
+
+GLint geometryVerticesOut(GLuint program) {
+    GLint n = -1;
+    if (program) glGetProgramiv(program, GL_GEOMETRY_VERTICES_OUT, &n);
+    return n;
+}
+
+/// torus_knot plus an open strip of 2 x 8 quads that passes beside the light (0.03 of the light's
+/// distance to the scene off its axis), from behind it (0.05 of that distance) to in front of it
+/// (0.2), out of the camera's view. The first column's 16 triangles straddle the light's eye plane
+/// (w = 0 of every light frustum) and their front parts shadow a wide wedge of the scene that the
+/// rest of the strip does not: the spill pass alone draws those shadows.
+penumbra::scene::Scene eyePlaneScene() {
+    penumbra::scene::Scene scene = penumbra::scene::builtin("torus_knot");
+    const glm::vec3 l = scene.light.position;
+    const glm::vec3 target = 0.5f * (scene.bounds().min + scene.bounds().max);
+    const float distance = glm::length(target - l);
+    const glm::vec3 dir = (target - l) / distance;
+    const glm::vec3 u = glm::normalize(glm::cross(dir, glm::vec3(0, 0, 1)));
+    const glm::vec3 v = glm::cross(u, dir);
+    penumbra::scene::Mesh strip;
+    strip.name = "eye_plane_strip";
+    const uint32_t columns = 2, rows = 8;
+    for (uint32_t j = 0; j <= rows; ++j) {
+        for (uint32_t i = 0; i <= columns; ++i) {
+            const float s = distance * (-0.05f + 0.25f * float(i) / float(columns));
+            const float t = distance * (-0.1f + 0.2f * float(j) / float(rows));
+            strip.positions.push_back(l + s * dir + 0.03f * distance * u + t * v);
+            strip.normals.push_back(-u);
+        }
+    }
+    for (uint32_t j = 0; j < rows; ++j) {
+        for (uint32_t i = 0; i < columns; ++i) {
+            const uint32_t a = j * (columns + 1) + i, b = a + 1, c = a + columns + 1, d = c + 1;
+            strip.indices.insert(strip.indices.end(), {a, b, d, a, d, c});
+        }
+    }
+    strip.closed = false;
+    scene.meshes.push_back(std::move(strip));
+    return scene;
+}
+
+struct RunResult {
+    std::vector<uint32_t> states;
+    penumbra::AliasFreeHardFrame frame;
+    size_t shadowed = 0;
+};
+
+RunResult runVariant(const Fixture& f, const penumbra::SampleListsLight& light, ViewSamples v,
+                     const penumbra::AliasFreeHardOptions& o) {
+    penumbra::AliasFreeHardShadows pipeline(o);
+    RunResult r;
+    r.states = runPipeline(pipeline, f, light, v);
+    r.frame = pipeline.readFrame();
+    for (uint32_t s : r.states) r.shadowed += s == PENUMBRA_AFH_SHADOWED;
+    return r;
+}
+
+}  // namespace
+
+TEST_CASE("Fixed-6 light pass: the casters' geometry stage declares max_vertices 6; the spill pass 13; Exact 13") {
+    context();
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = 64;
+    o.grid_height = 48;
+    CHECK(o.variant == penumbra::ConservativeVariant::Fixed6);  // the default
+    CHECK(o.fixed6_two_pass);
+    for (bool count_work : {false, true}) {
+        o.count_work = count_work;
+        o.variant = penumbra::ConservativeVariant::Fixed6;
+        o.fixed6_two_pass = true;
+        {
+            penumbra::AliasFreeHardShadows pipeline(o);
+            CHECK(pipeline.twoPass());
+            CHECK(geometryVerticesOut(pipeline.lightPassProgram()) == penumbra::kConservativeFixed6MaxVertices);
+            CHECK(geometryVerticesOut(pipeline.lightPassProgram()) <= 6);
+            CHECK(geometryVerticesOut(pipeline.spillPassProgram()) == penumbra::kConservativeMaxVertices);
+            CHECK(pipeline.conservativeSetup().spill.capacity == penumbra::kConservativeDefaultSpillCapacity);
+        }
+        o.fixed6_two_pass = false;
+        {
+            penumbra::AliasFreeHardShadows pipeline(o);
+            CHECK_FALSE(pipeline.twoPass());
+            CHECK(pipeline.spillPassProgram() == 0u);
+            CHECK(geometryVerticesOut(pipeline.lightPassProgram()) == penumbra::kConservativeMaxVertices);
+        }
+        o.variant = penumbra::ConservativeVariant::Exact;
+        o.fixed6_two_pass = true;  // ignored: Exact has one pass
+        {
+            penumbra::AliasFreeHardShadows pipeline(o);
+            CHECK_FALSE(pipeline.twoPass());
+            CHECK(pipeline.spillPassProgram() == 0u);
+            CHECK(geometryVerticesOut(pipeline.lightPassProgram()) == penumbra::kConservativeMaxVertices);
+        }
+    }
+    // Capacity from the caster bound, validated at construction.
+    o.variant = penumbra::ConservativeVariant::Fixed6;
+    o.max_caster_triangles = 12345;
+    CHECK(penumbra::AliasFreeHardShadows(o).conservativeSetup().spill.capacity == 12345u);
+    o.spill_capacity = 77;
+    CHECK(penumbra::AliasFreeHardShadows(o).conservativeSetup().spill.capacity == 77u);
+    o.spill_capacity = penumbra::kConservativeMaxSpillCapacity + 1;
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("spill_capacity 16777217"), penumbra::Error);
+    o.spill_capacity = 0;
+    o.max_caster_triangles = penumbra::kConservativeMaxSpillCapacity + 1;
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("max_caster_triangles 16777217"),
+                         penumbra::Error);
+    o.spill_capacity = 1000;  // a smaller buffer than the bound: allowed (overflow is counted)
+    CHECK(penumbra::AliasFreeHardShadows(o).conservativeSetup().spill.capacity == 1000u);
+}
+
+TEST_CASE("Fixed-6 two-pass: casters crossing the light's eye plane give the Exact variant's states, 0 mismatches") {
+    context();
+    Fixture f(eyePlaneScene(), 128, 96);
+    const auto light = pointLight(f, f.scene.light.position);
+    const uint32_t strip_triangles = f.gpu->ranges().back().index_count / 3;
+    for (ViewSamples v : {ViewSamples::Exact, ViewSamples::Depth}) {
+        const std::string input = viewSamplesName(v);
+        CAPTURE(input);
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 128;
+        o.grid_height = 96;
+        o.count_work = true;
+        if (v == ViewSamples::Depth) o.coplanar_epsilon = kDepthCoplanarEpsilon;
+        const RunResult two_pass = runVariant(f, light, v, o);
+        penumbra::AliasFreeHardOptions single = o;
+        single.fixed6_two_pass = false;
+        const RunResult one_pass = runVariant(f, light, v, single);
+        penumbra::AliasFreeHardOptions exact = o;
+        exact.variant = penumbra::ConservativeVariant::Exact;
+        const RunResult exact_run = runVariant(f, light, v, exact);
+
+        penumbra::SampleListsLight fitted = light;
+        fitted.view_projection = two_pass.frame.light_view_projection;
+        const uint64_t predicted = penumbra::afhSpilledTriangles(o, fitted, f.casters());
+        const Comparison c = compareWithOracle(f, f.tested(v), light, two_pass.states, o.coplanar_epsilon, 0.0f);
+        MESSAGE("eye-plane strip (", strip_triangles, " of ", f.gpu->triangleCount(), " triangles), ", input,
+                " input: spilled ", two_pass.frame.spilled, " (CPU predicate ", predicted, "), overflow ",
+                two_pass.frame.spill_overflow, "; ", c.tested, " samples, ", c.shadowed, " shadowed, mismatched ",
+                c.mismatched, ", ties ", c.ties, "; fragments two-pass ", two_pass.frame.fragments, " single ",
+                one_pass.frame.fragments, ", triangles emitted ", two_pass.frame.triangles_emitted, " / ",
+                one_pass.frame.triangles_emitted);
+        // The spill pass ran, for exactly the triangles the CPU predicate spills, and lost none.
+        CHECK(two_pass.frame.spilled > 8);
+        CHECK(two_pass.frame.spilled == predicted);
+        CHECK(two_pass.frame.spill_overflow == 0);
+        CHECK(one_pass.frame.spilled == 0);   // no spill pass
+        CHECK(exact_run.frame.spilled == 0);
+        // Same hulls as the single pass: the same fragments, every triangle emitted once.
+        CHECK(two_pass.frame.fragments == one_pass.frame.fragments);
+        CHECK(two_pass.frame.triangles_emitted == one_pass.frame.triangles_emitted);
+        // Identical states across the passes and variants; exact against the oracle.
+        CHECK(two_pass.states == one_pass.states);
+        CHECK(two_pass.states == exact_run.states);
+        CHECK(c.mismatched == 0);
+        CHECK(c.untested == 0);
+        CHECK(c.tested > 128 * 96 / 8);
+        CHECK(c.shadowed > 500);
+        // GPU == CPU twin.
+        const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.tested(v).data(), f.normals.data(), f.samples(), f.casters());
+        CHECK(two_pass.states == cpu);
+    }
+}
+
+TEST_CASE("Fixed-6 two-pass: spill overflow is reported; lost triangles only remove shadows; multi-pass blocks") {
+    context();
+    Fixture f(eyePlaneScene(), 96, 72);
+    const auto light = pointLight(f, f.scene.light.position);
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = 96;
+    o.grid_height = 72;
+    o.max_caster_triangles = f.gpu->triangleCount();  // the bound: can never overflow
+    const RunResult full = runVariant(f, light, ViewSamples::Exact, o);
+    REQUIRE(full.frame.spilled > 8);
+    CHECK(full.frame.spill_overflow == 0);
+    for (uint32_t capacity : {1u, 5u}) {
+        CAPTURE(capacity);
+        penumbra::AliasFreeHardOptions tiny = o;
+        tiny.spill_capacity = capacity;
+        const RunResult r = runVariant(f, light, ViewSamples::Exact, tiny);
+        MESSAGE("spill capacity ", capacity, ": spilled ", r.frame.spilled, ", overflow ", r.frame.spill_overflow,
+                ", shadowed ", r.shadowed, " of the full run's ", full.shadowed);
+        CHECK(r.frame.spilled == full.frame.spilled);
+        CHECK(r.frame.spill_overflow == full.frame.spilled - capacity);
+        // Lost triangles are not rasterized: shadows can only go missing, none appear.
+        size_t appeared = 0;
+        for (size_t i = 0; i < r.states.size(); ++i) {
+            appeared += r.states[i] == PENUMBRA_AFH_SHADOWED && full.states[i] != PENUMBRA_AFH_SHADOWED;
+        }
+        CHECK(appeared == 0);
+        CHECK(r.shadowed < full.shadowed);  // the strip's near part casts a wide shadow
+    }
+    // Several list blocks: every block resets the spill buffers and draws the spill pass.
+    penumbra::AliasFreeHardOptions blocks = o;
+    blocks.grid_width = 24;
+    blocks.grid_height = 18;
+    blocks.list_block = 16;
+    blocks.max_list_blocks = 64;
+    const RunResult multi = runVariant(f, light, ViewSamples::Exact, blocks);
+    penumbra::AliasFreeHardOptions blocks_exact = blocks;
+    blocks_exact.variant = penumbra::ConservativeVariant::Exact;
+    const RunResult multi_exact = runVariant(f, light, ViewSamples::Exact, blocks_exact);
+    MESSAGE("24x18 grid, list block 16: passes ", multi.frame.passes, ", spilled ", multi.frame.spilled);
+    CHECK(multi.frame.passes > 1);
+    CHECK(multi.frame.overflow == 0);
+    CHECK(multi.frame.spilled > 0);
+    CHECK(multi.frame.spill_overflow == 0);
+    CHECK(multi.states == multi_exact.states);
+    const Comparison c = compareWithOracle(f, f.positions, light, multi.states, o.coplanar_epsilon, 0.0f);
+    CHECK(c.mismatched == 0);
 }

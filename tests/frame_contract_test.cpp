@@ -151,7 +151,7 @@ TEST_CASE("SampleListBuilder::build (fit + statistics on the GPU): buffer and de
     CHECK(misuse.allocations == 0);
 }
 
-TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast") {
+TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast; Fixed-6 two-pass and Exact variant") {
     context();
     World w;
     auto draw = [&](penumbra::CasterClass cls) {
@@ -160,16 +160,22 @@ TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast") {
         }
     };
     const penumbra::AliasFreeHardShadows::DrawCasters casters = draw;  // built once, outside the frame
-    for (auto precision : {penumbra::AfhPrecision::Exact, penumbra::AfhPrecision::Fast}) {
+    // Default Fixed-6 (two-pass light pass: spill reset, direct pass at max_vertices 6, indirect
+    // spill draw, GPU copy of the spill figures) in exact and fast precision, and the Exact variant.
+    for (int config = 0; config < 3; ++config) {
+        const auto precision = config == 1 ? penumbra::AfhPrecision::Fast : penumbra::AfhPrecision::Exact;
         penumbra::AliasFreeHardOptions o;
         o.grid_width = 96;
         o.grid_height = 72;
         o.precision = precision;
+        if (config == 2) o.variant = penumbra::ConservativeVariant::Exact;
         penumbra::AliasFreeHardShadows pipeline(o);
+        CHECK(pipeline.twoPass() == (config != 2));
         pipeline.reserve(w.samples());
         pipeline.validate(w.bufferInput(), w.samples());
         pipeline.validate(w.depthInput());
-        const char* name = precision == penumbra::AfhPrecision::Exact ? "run, exact" : "run, fast";
+        const char* name = config == 0 ? "run, fixed6 two-pass, exact" : config == 1 ? "run, fixed6 two-pass, fast"
+                                                                                   : "run, exact variant, exact";
         checkContract(record([&] { return pipeline.run(w.bufferInput(), w.samples(), w.light, casters); }),
                       std::string(name) + ", buffer input");
         checkContract(record([&] { return pipeline.run(w.depthInput(), w.light, casters); }),

@@ -20,6 +20,13 @@
 // world origin use a camera- or light-relative frame — subtract a double origin on the host
 // (relativePosition) before anything becomes float; floats of 1e6-sized coordinates carry
 // only ~0.06 units of precision, and no exact test can recover what the rounding lost.
+// Light pass (ConservativeVariant::Fixed6, the default): the casters' geometry stage declares the
+// seed's max_vertices = 6 (sintorn2008 §3.2); triangles that need clipping (they cross the light's
+// eye plane w = min_w or the guard band: 0-18 per run in the tests) go to a spill pass drawn
+// indirectly at max_vertices 13 — the same fragments and states as one pass at 13. Its buffers hold
+// spill_capacity triangles (default: max_caster_triangles, else 65 536); a triangle past that is
+// not rasterized and counted (AliasFreeHardFrame::spill_overflow): results are exact only when it
+// is 0. fixed6_two_pass = false keeps the single pass; ConservativeVariant::Exact always has one.
 // Point lights: all samples must lie in front of the light (one frustum; a light inside the
 // scene needs one pipeline run per cube face). Directional lights: each sample's light point is
 // taken `directional_reach` along the light direction: exact for casters within that distance.
@@ -50,6 +57,8 @@ namespace penumbra {
 using AfhParams = shared::PenumbraAfhParams;
 static_assert(sizeof(AfhParams) == 80 && offsetof(AfhParams, exact) == 64,
               "PenumbraAfhParams must be 80 bytes with the dvec2 at 64 (std140 == std430)");
+static_assert(sizeof(shared::PenumbraAfhSpillWorldHeader) == 16 && sizeof(shared::PenumbraAfhSpillWorld) == 48,
+              "std430 layout light_pass.geom.glsl assumes: a uvec4 header, three vec4 per spilled triangle");
 
 enum class AfhPrecision { Exact, Fast };
 enum class CasterClass { Closed, Open };
@@ -86,6 +95,23 @@ struct AliasFreeHardOptions {
     /// measured: 1 of 150 209 samples of the torus knot at 512x384). Use it when closed meshes
     /// are watertight and such creases are rare or invisible; leave it off for exact results.
     bool back_faces_only = false;
+    /// ConservativeVariant::Fixed6 only: the two-pass light pass (default) — a direct pass whose
+    /// geometry stage declares the seed's max_vertices = 6 (sintorn2008 §3.2; the declared output
+    /// size sets GS throughput on real GPUs) and an indirect spill pass (max_vertices 13) for the
+    /// triangles that need clipping (they cross the light's eye plane or the guard band); same
+    /// fragments, same states. false: the single pass at max_vertices 13 (for comparison).
+    /// ConservativeVariant::Exact always runs one pass at 13 (its unclipped hull alone needs 7).
+    bool fixed6_two_pass = true;
+    /// Two-pass plan: the most caster triangles one call of your DrawCasters callback draws per
+    /// list block, both classes together (0 = not given). Sizes the spill buffers so that they can
+    /// never overflow, whatever the light.
+    uint32_t max_caster_triangles = 0;
+    /// Two-pass plan: triangles the spill buffers hold (0 = max_caster_triangles, or
+    /// kConservativeDefaultSpillCapacity = 65 536 when that is 0 too; at most
+    /// kConservativeMaxSpillCapacity). 112 bytes each, allocated once at construction. A triangle
+    /// that needs clipping and finds the buffers full is NOT rasterized — shadows it casts may be
+    /// missing; AliasFreeHardFrame::spill_overflow counts such triangles (0 = results exact).
+    uint32_t spill_capacity = 0;
 };
 
 /// What one run did.
@@ -99,6 +125,11 @@ struct AliasFreeHardFrame {
     uint64_t overflow = 0;                  ///< samples left untested past the last block
     uint64_t fragments = 0, tests = 0, triangles_emitted = 0;  ///< when count_work
     uint64_t fallbacks = 0;  ///< when count_work, exact filtered mode: blocker tests decided in double
+    /// Fixed-6 two-pass light pass (always counted, list block 0; every block draws the same
+    /// casters): caster triangles the direct pass handed to the spill pass (those that need
+    /// clipping, afhSpilledTriangles() on the CPU), and of them the ones lost because the spill
+    /// buffers were full (not rasterized: shadows may be missing; raise spill_capacity).
+    uint64_t spilled = 0, spill_overflow = 0;
 };
 
 /// p - origin computed in double, then rounded once to float: the camera- or light-relative
@@ -189,7 +220,19 @@ inline ConservativeRasterSetup afhConservativeSetup(const AliasFreeHardOptions& 
     cr.variant = options.variant;
     cr.clip_to_box = options.clip_to_box;
     cr.near_plane = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    cr.max_triangles = options.max_caster_triangles;
+    cr.spill_capacity = options.spill_capacity;
     return conservativeRasterSetup(cr);
+}
+
+/// True when the light pass runs the Fixed-6 two-pass plan (direct pass at max_vertices 6 + spill).
+inline bool afhTwoPass(const AliasFreeHardOptions& options) {
+    return options.variant == ConservativeVariant::Fixed6 && options.fixed6_two_pass;
+}
+
+/// Bytes of the spill-world buffer for `capacity` spilled triangles (16-byte header + 48 each).
+inline uint64_t afhSpillWorldBytes(uint32_t capacity) {
+    return sizeof(shared::PenumbraAfhSpillWorldHeader) + uint64_t(capacity) * sizeof(shared::PenumbraAfhSpillWorld);
 }
 
 inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const glm::vec4& light) {
@@ -205,6 +248,11 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
                    "penumbra::AliasFreeHardShadows: list_block ", o.list_block, " is outside [1, 16384]");
     PENUMBRA_CHECK(o.max_list_blocks >= 1 && o.max_list_blocks <= 64,
                    "penumbra::AliasFreeHardShadows: max_list_blocks ", o.max_list_blocks, " is outside [1, 64]");
+    PENUMBRA_CHECK(o.spill_capacity <= kConservativeMaxSpillCapacity, "penumbra::AliasFreeHardShadows: spill_capacity ",
+                   o.spill_capacity, " is above ", kConservativeMaxSpillCapacity, " triangles");
+    PENUMBRA_CHECK(o.spill_capacity != 0 || o.max_caster_triangles <= kConservativeMaxSpillCapacity,
+                   "penumbra::AliasFreeHardShadows: max_caster_triangles ", o.max_caster_triangles,
+                   " would size spill buffers above ", kConservativeMaxSpillCapacity, " triangles; give a smaller spill_capacity");
     PENUMBRA_CHECK(std::isfinite(light.x) && std::isfinite(light.y) && std::isfinite(light.z) &&
                        (light.w == 0.0f || light.w == 1.0f),
                    "penumbra::AliasFreeHardShadows: light must be finite with w = 1 (point) or 0 (directional)");
@@ -299,6 +347,41 @@ struct AfhCasters {
     const std::vector<uint8_t>* closed = nullptr;
 };
 
+namespace detail {
+/// The light pass's class culling (light_pass.geom.glsl): with back_faces_only, a closed caster's
+/// triangle that does not face away from the light casts nothing (§3.3).
+inline bool afhCulled(const AliasFreeHardOptions& options, bool closed, const glm::vec3 (&v)[3], const glm::vec4& light) {
+    if (!closed || !options.back_faces_only) return false;
+    const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
+    const glm::dvec3 to_light = light.w != 0.0f ? glm::dvec3(light) - a : glm::dvec3(light);
+    return glm::dot(glm::cross(b - a, c - a), to_light) >= 0.0;
+}
+}  // namespace detail
+
+/// CPU twin of the two-pass light pass's spill count (AliasFreeHardFrame::spilled): the caster
+/// triangles that survive the class culling and for which conservativeNeedsSpill() holds,
+/// projected with `light.view_projection` (pass the frame's light_view_projection) — those that
+/// cross the light's eye plane (w = min_w) or the guard band. Independent of the variant and of
+/// fixed6_two_pass (the single passes clip exactly these).
+inline uint64_t afhSpilledTriangles(const AliasFreeHardOptions& options, const SampleListsLight& light,
+                                    const AfhCasters& casters) {
+    PENUMBRA_CHECK(casters.positions && casters.indices && casters.closed &&
+                       casters.closed->size() * 3 == casters.indices->size(),
+                   "penumbra::afhSpilledTriangles: casters need positions, indices and one closed flag per triangle");
+    const ConservativeRasterSetup cr = afhConservativeSetup(options);
+    const auto& P = *casters.positions;
+    const auto& I = *casters.indices;
+    uint64_t spilled = 0;
+    for (size_t t = 0; t < casters.closed->size(); ++t) {
+        const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
+        if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
+        spilled += conservativeNeedsSpill(light.view_projection * glm::vec4(v[0], 1.0f),
+                                          light.view_projection * glm::vec4(v[1], 1.0f),
+                                          light.view_projection * glm::vec4(v[2], 1.0f), cr);
+    }
+    return spilled;
+}
+
 /// CPU twin of AliasFreeHardShadows::run after the fit: builds the same lists (buildSampleListsCpu
 /// with `light`, whose view_projection must be the frame's light_view_projection), tests every
 /// caster against the samples of the texels its clipped projection's bounding box touches (a
@@ -326,11 +409,7 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
         // The shared degenerate-triangle rule (the oracle drops these; the light pass discards them).
         if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
-        if ((*casters.closed)[t] && options.back_faces_only) {
-            const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
-            const glm::dvec3 to_light = point ? lpos - a : lpos;
-            if (glm::dot(glm::cross(b - a, c - a), to_light) >= 0.0) continue;
-        }
+        if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
         const glm::vec4 clip[3] = {light.view_projection * glm::vec4(v[0], 1.0f),
                                    light.view_projection * glm::vec4(v[1], 1.0f),
                                    light.view_projection * glm::vec4(v[2], 1.0f)};

@@ -31,6 +31,16 @@
 #ifndef PENUMBRA_AFH_HEADER_BINDING
 #define PENUMBRA_AFH_HEADER_BINDING 5    // the lists' header (block predicate pass)
 #endif
+// Fixed-6 two-pass light pass (penumbra/conservative_raster's spill plan): the direct pass's
+// geometry stage appends triangles that need clipping to the spill buffer and their world-space
+// vertices to the spill-world buffer; the spill pass reads both. Light pass only (the predicate
+// pass and the resolve use 5 and 7 for other buffers); the caster-position hook must not use them.
+#ifndef PENUMBRA_AFH_SPILL_BINDING
+#define PENUMBRA_AFH_SPILL_BINDING 5        // PenumbraConservativeSpillHeader + triangles
+#endif
+#ifndef PENUMBRA_AFH_SPILL_WORLD_BINDING
+#define PENUMBRA_AFH_SPILL_WORLD_BINDING 7  // PenumbraAfhSpillWorldHeader + PenumbraAfhSpillWorld[]
+#endif
 // Resolve bindings.
 #ifndef PENUMBRA_AFH_SLOTS_BINDING
 #define PENUMBRA_AFH_SLOTS_BINDING 5
@@ -59,6 +69,9 @@
 #define PENUMBRA_AFH_WORK_TRIANGLES 2
 #define PENUMBRA_AFH_WORK_OVERFLOW 3  // samples left untested past the last list block
 #define PENUMBRA_AFH_WORK_FALLBACKS 4 // filtered exact test: sign decisions that needed fp64
+// Fixed-6 two-pass light pass, always (copied from list block 0's spill header on the GPU):
+#define PENUMBRA_AFH_WORK_SPILL_COUNT 5     // header.count = 3 * triangles the spill pass drew
+#define PENUMBRA_AFH_WORK_SPILL_OVERFLOW 6  // header.overflow = triangles lost (spill array full)
 #define PENUMBRA_AFH_WORK_WORDS 8
 
 #ifdef __cplusplus
@@ -76,6 +89,23 @@ struct PenumbraAfhParams {
     uvec4 pass;      // x = block index of this pass, y = sample count (resolve), z = samples per
                      // list the light pass walks (max_list_blocks * list block; resolve), w = unused
     dvec2 exact;     // x = coplanar epsilon (relative), in double as the oracle and the CPU twin use it
+};
+
+// The spill-world buffer of the Fixed-6 two-pass light pass (std430): a 16-byte header, then one
+// entry per spill slot. The direct pass takes entry `count++` for each triangle it spills, writes
+// the triangle's world-space vertices there and stores the entry's index in the spill payload's x
+// (y = the draw's flags); a triangle that finds every entry taken is not appended (header.overflow
+// of the spill buffer counts it), so the two arrays always hold the same triangles.
+struct PenumbraAfhSpillWorldHeader {
+    uint count;  // entries handed out (may exceed the capacity: the excess overflowed)
+    uint reserved0;
+    uint reserved1;
+    uint reserved2;
+};
+struct PenumbraAfhSpillWorld {
+    vec4 v0;  // xyz = world-space vertex 0 as the vertex stage produced it, bit for bit; w = 0
+    vec4 v1;
+    vec4 v2;
 };
 
 #ifdef __cplusplus

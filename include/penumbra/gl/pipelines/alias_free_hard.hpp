@@ -32,24 +32,41 @@
 //             emits the triangle's conservative coverage; each fragment walks its texel's list
 //             block and ORs the shadow bit of every sample the triangle blocks (4 planes), (5)
 //             resolve. Nothing is read back, queried, allocated or thrown: misuse returns a Status.
+//   Fixed-6 (default variant, fixed6_two_pass): step (4) is penumbra/conservative_raster's
+//             two-pass plan, inside each block's conditional render: reset the spill header
+//             (gl::beginConservativeSpill) and the spill-world counter, both caster classes through
+//             the direct program (geometry stage max_vertices = 6, the seed's §3.2 figure), which
+//             appends each triangle that needs clipping (it crosses the light's eye plane or the
+//             guard band) with its world-space vertices to the spill buffers, then one
+//             glDrawArraysIndirect of the spill program (max_vertices 13) whose command is the
+//             spill header (gl::drawConservativeSpill: barrier, indirect draw, no attributes).
+//             Same fragments, same states as the single pass. The spill buffers (112 bytes per
+//             triangle, AliasFreeHardOptions::spill_capacity) are allocated at construction; an
+//             overflow loses triangles (shadows may be missing) and is reported by readFrame()
+//             (spill_overflow). Block 0's spill header is copied on the GPU into the work buffer.
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
 // (off), GL_DEPTH_CLAMP (left on: casters before the near / beyond the far plane still cast), the
-// vertex-array binding (its own empty VAO during the predicate pass; then whatever your callback
-// binds), the uniform-buffer bindings of AfhBindings and 0 (conservative parameters), SSBO
-// bindings of AfhBindings, and whatever the sample-list builder and scanner bind. Ends with
+// vertex-array binding (its own empty VAO during the predicate pass and the spill passes; then
+// whatever your callback binds, or, two-pass, the empty VAO again), the uniform-buffer bindings of
+// AfhBindings and 0 (conservative parameters), SSBO bindings of AfhBindings, the
+// GL_DRAW_INDIRECT_BUFFER binding (two-pass: the spill buffer), and whatever the sample-list
+// builder and scanner bind. Your caster callback must leave the light pass's SSBO bindings
+// (counts, offsets, positions, shadow, work, spill, spill_world) alone. Ends with
 // GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
 #ifndef PENUMBRA_GL_PIPELINES_ALIAS_FREE_HARD_HPP
 #define PENUMBRA_GL_PIPELINES_ALIAS_FREE_HARD_HPP
 
 #include "penumbra/buffer_range.hpp"
+#include "penumbra/gl/conservative_raster.hpp"
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/sample_lists.hpp"
 #include "penumbra/gl/shader.hpp"
 #include "penumbra/gl/validate.hpp"
 #include "penumbra/pipelines/alias_free_hard.hpp"
 
+#include <cstddef>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -71,6 +88,8 @@ struct AfhBindings {
     uint32_t slots = PENUMBRA_AFH_SLOTS_BINDING;
     uint32_t texels = PENUMBRA_AFH_TEXELS_BINDING;
     uint32_t states = PENUMBRA_AFH_STATES_BINDING;
+    uint32_t spill = PENUMBRA_AFH_SPILL_BINDING;              ///< Fixed-6 two-pass light pass only
+    uint32_t spill_world = PENUMBRA_AFH_SPILL_WORLD_BINDING;  ///< Fixed-6 two-pass light pass only
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -99,12 +118,39 @@ public:
             {"PENUMBRA_AFH_POSITIONS_BINDING", b.positions}, {"PENUMBRA_AFH_SHADOW_BINDING", b.shadow},
             {"PENUMBRA_AFH_WORK_BINDING", b.work}, {"PENUMBRA_AFH_HEADER_BINDING", b.header},
             {"PENUMBRA_AFH_SLOTS_BINDING", b.slots}, {"PENUMBRA_AFH_TEXELS_BINDING", b.texels},
-            {"PENUMBRA_AFH_STATES_BINDING", b.states}};
+            {"PENUMBRA_AFH_STATES_BINDING", b.states}, {"PENUMBRA_AFH_SPILL_BINDING", b.spill},
+            {"PENUMBRA_AFH_SPILL_WORLD_BINDING", b.spill_world}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
-        light_pass_ = gl::buildProgram({"penumbra/alias_free_hard/light_pass.vert.glsl",
-                                        "penumbra/alias_free_hard/light_pass.geom.glsl",
-                                        "penumbra/alias_free_hard/light_pass.frag.glsl"},
-                                       defines, library);
+        const std::vector<std::string> light_stages = {"penumbra/alias_free_hard/light_pass.vert.glsl",
+                                                       "penumbra/alias_free_hard/light_pass.geom.glsl",
+                                                       "penumbra/alias_free_hard/light_pass.frag.glsl"};
+        two_pass_ = afhTwoPass(options_);
+        // The geometry stage's storage blocks: work counters, and two-pass the spill + spill-world
+        // buffers (GL only requires 0 geometry-stage storage blocks; desktop drivers have 8..16).
+        const GLint geometry_blocks_needed = (options_.count_work ? 1 : 0) + (two_pass_ ? 2 : 0);
+        if (geometry_blocks_needed > 0) {
+            const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
+            PENUMBRA_CHECK(geometry_blocks >= geometry_blocks_needed,
+                           "penumbra::AliasFreeHardShadows: GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS = ", geometry_blocks,
+                           ", the light pass's geometry stage needs ", geometry_blocks_needed,
+                           two_pass_ ? " (Fixed-6 two-pass: set fixed6_two_pass = false or use ConservativeVariant::Exact)"
+                                     : " (count_work)");
+        }
+        if (two_pass_) {
+            // Direct pass at the seed's 6 output vertices, spill pass at 13 (penumbra/conservative_raster).
+            ShaderDefines direct = defines, spill = defines;
+            direct.push_back({"PENUMBRA_CONSERVATIVE_DIRECT", "1"});
+            spill.push_back({"PENUMBRA_CONSERVATIVE_SPILL_DRAW", "1"});
+            light_pass_ = gl::buildProgram(light_stages, direct, library);
+            spill_pass_ = gl::buildProgram(light_stages, spill, library);
+            spill_ = gl::Buffer(static_cast<size_t>(conservative_.spill.buffer_bytes));
+            spill_world_ = gl::Buffer(static_cast<size_t>(afhSpillWorldBytes(conservative_.spill.capacity)));
+            gl::validateConservativeSpill(conservative_, spillRange());
+            spill_bindings_.params = PENUMBRA_CONSERVATIVE_PARAMS_BINDING;
+            spill_bindings_.spill = b.spill;
+        } else {
+            light_pass_ = gl::buildProgram(light_stages, defines, library);
+        }
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/alias_free_hard/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", defines, library);
@@ -210,6 +256,8 @@ public:
         f.tests = work[PENUMBRA_AFH_WORK_TESTS];
         f.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
         f.fallbacks = work[PENUMBRA_AFH_WORK_FALLBACKS];
+        f.spill_overflow = work[PENUMBRA_AFH_WORK_SPILL_OVERFLOW];
+        f.spilled = work[PENUMBRA_AFH_WORK_SPILL_COUNT] / 3u + f.spill_overflow;
         return f;
     }
 
@@ -225,14 +273,25 @@ public:
     const SampleListsSetup& setup() const { return setup_; }
     const gl::Buffer& shadowBits() const { return shadow_; }
     uint32_t reservedSamples() const { return reserved_; }
+    /// The light pass's caster program (two-pass: the direct pass, geometry stage max_vertices 6;
+    /// otherwise the single pass, 13) and the spill pass's program (0 unless two-pass). Query
+    /// GL_GEOMETRY_VERTICES_OUT on them to see what the geometry stages declare.
+    GLuint lightPassProgram() const { return light_pass_.id(); }
+    GLuint spillPassProgram() const { return spill_pass_.id(); }
+    /// Two-pass: the spill-pass plan the light pass records (capacity, sizes), and its buffer.
+    const ConservativeRasterSetup& conservativeSetup() const { return conservative_; }
+    bool twoPass() const { return two_pass_; }
 
 private:
     AliasFreeHardOptions options_;
     AfhBindings bindings_;
     SampleListBuilder builder_;
     ConservativeRasterSetup conservative_;
-    gl::Program light_pass_, blocks_, resolve_;
+    gl::Program light_pass_, spill_pass_, blocks_, resolve_;
     gl::Buffer conservative_params_, afh_params_, work_, frustum_;
+    gl::Buffer spill_, spill_world_;  // two-pass only: spill header + triangles, spill-world header + vertices
+    gl::ConservativeRasterBindings spill_bindings_{};
+    bool two_pass_ = false;
     gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, shadow_, states_;
     gl::Framebuffer framebuffer_;
     gl::VertexArray empty_vao_;
@@ -241,6 +300,8 @@ private:
     uint32_t ubo_alignment_ = 256, param_stride_ = 256;
     uint32_t reserved_ = 0;
     SampleListsSetup setup_;
+
+    BufferRange spillRange() const { return {spill_.id(), 0, spill_.size()}; }
 
     static Status fail(Status s) {
         PENUMBRA_ASSERT(s == Status::Ok && "penumbra::AliasFreeHardShadows: per-frame misuse (see the returned Status)");
@@ -325,16 +386,43 @@ private:
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, list_positions_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        static constexpr shared::PenumbraAfhSpillWorldHeader kSpillWorldReset{};
+        const BufferRange spill = spillRange();
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+            if (two_pass_) {
+                // Buffer updates run whether or not the block is drawn; they only reset.
+                gl::beginConservativeSpill(conservative_, spill, spill_bindings_);  // validated at construction
+                glNamedBufferSubData(spill_world_.id(), 0, sizeof kSpillWorldReset, &kSpillWorldReset);
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
+            }
             for (uint32_t c = 0; c < 2; ++c) {
                 bindParams(1 + 2 * b + c);
                 light_pass_.use();
                 draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
             }
+            if (two_pass_) {
+                // One spill draw for both classes: culling happened in the direct pass, and the
+                // fragment stage reads no class flag, so block b's open-class slot serves both.
+                spill_pass_.use();
+                bindParams(1 + 2 * b + 1);
+                glBindVertexArray(empty_vao_.id());
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
+                gl::drawConservativeSpill(conservative_, spill, spill_bindings_);
+            }
             glEndConditionalRender();
-            // Later blocks read the bits earlier ones wrote (the skip of shadowed samples).
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            // Later blocks read the bits earlier ones wrote (the skip of shadowed samples); the
+            // next block's spill reset and the copy below follow the appends.
+            glMemoryBarrier(two_pass_ ? GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT
+                                      : GL_SHADER_STORAGE_BARRIER_BIT);
+            if (two_pass_ && b == 0) {
+                // Block 0's spill figures for readFrame(), on the GPU (every block spills the same
+                // triangles; a skipped block 0 leaves the reset header: nothing spilled).
+                glCopyNamedBufferSubData(spill_.id(), work_.id(), offsetof(ConservativeSpillHeader, count),
+                                         PENUMBRA_AFH_WORK_SPILL_COUNT * 4, 4);
+                glCopyNamedBufferSubData(spill_.id(), work_.id(), offsetof(ConservativeSpillHeader, overflow),
+                                         PENUMBRA_AFH_WORK_SPILL_OVERFLOW * 4, 4);
+            }
         }
         // (5) Resolve.
         resolve_.use();
