@@ -8,6 +8,7 @@
 
 #include <penumbra/gl/headless.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
+#include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/obj.hpp>
@@ -112,51 +113,23 @@ struct Comparison {
 Comparison compareWithOracle(const Fixture& f, const std::vector<glm::vec4>& positions,
                              const penumbra::SampleListsLight& light, const std::vector<uint32_t>& states,
                              double coplanar_epsilon, float reach, bool report = true) {
-    penumbra::reference::VisibilityOracle oracle(f.gpu->positions(), f.gpu->indices());
+    // The one comparison loop of tests, benchmarks and the demo (reference/compare.hpp).
+    const penumbra::reference::VisibilityOracle oracle(f.gpu->positions(), f.gpu->indices());
     penumbra::reference::VisibilityOptions options;
     options.coplanar_epsilon = coplanar_epsilon;
+    const penumbra::reference::HardComparison h = penumbra::reference::compareHardStates(
+        oracle, positions, states, penumbra::reference::hardLight(light.light, reach), options, report ? 5 : 0);
+    for (const auto& m : h.first_mismatches) {
+        MESSAGE("mismatch: sample ", m.sample, " (", m.position.x, ", ", m.position.y, ", ", m.position.z, ") gpu ",
+                m.shadowed, " oracle ", m.blocked);
+    }
     Comparison c;
-    std::vector<glm::dvec3> receivers;
-    std::vector<uint32_t> ids;
-    for (uint32_t id = 0; id < states.size(); ++id) {
-        if (states[id] == PENUMBRA_AFH_BACK_FACING) ++c.back_facing;
-        if (states[id] == PENUMBRA_AFH_UNTESTED) ++c.untested;
-        if (states[id] != PENUMBRA_AFH_LIT && states[id] != PENUMBRA_AFH_SHADOWED) continue;
-        receivers.emplace_back(glm::vec3(positions[id]));
-        ids.push_back(id);
-    }
-    c.tested = receivers.size();
-    if (light.light.w != 0.0f) {
-        const auto result = oracle.evaluate(receivers, {glm::dvec3(glm::vec3(light.light))}, options);
-        for (size_t r = 0; r < receivers.size(); ++r) {
-            const bool gpu = states[ids[r]] == PENUMBRA_AFH_SHADOWED;
-            c.shadowed += gpu;
-            if (result.isTie(r, 0)) {
-                ++c.ties;
-                continue;
-            }
-            if (gpu != result.isBlocked(r, 0)) {
-                ++c.mismatched;
-                if (report && c.mismatched <= 5) {
-                    MESSAGE("mismatch: sample ", ids[r], " (", receivers[r].x, ", ", receivers[r].y, ", ", receivers[r].z,
-                            ") gpu ", gpu, " oracle ", result.isBlocked(r, 0));
-                }
-            }
-        }
-    } else {
-        const glm::dvec3 dir(glm::vec3(light.light));
-        for (size_t r = 0; r < receivers.size(); ++r) {
-            const bool gpu = states[ids[r]] == PENUMBRA_AFH_SHADOWED;
-            c.shadowed += gpu;
-            bool tie = false;
-            const bool blocked = oracle.segmentBlocked(receivers[r], receivers[r] + dir * double(reach), options, &tie);
-            if (tie) {
-                ++c.ties;
-                continue;
-            }
-            c.mismatched += gpu != blocked;
-        }
-    }
+    c.tested = h.samples;
+    c.shadowed = h.shadowed;
+    c.mismatched = h.mismatched;
+    c.ties = h.ties;
+    c.back_facing = h.back_facing;
+    c.untested = h.untested;
     return c;
 }
 
