@@ -54,7 +54,7 @@ Real pointTriangleDistance2(const glm::tvec3<Real>& p, const glm::tvec3<Real>& a
 /// The one degenerate-triangle rule of the oracle, the CPU twins and the GPU
 /// (penumbraAfhDegenerate in blocker_test.glsl): |(v1 - v0) x (v2 - v0)| <= 1e-12 * (longest
 /// edge)^2, compared squared, in double, products opaque. A degenerate triangle never blocks and is
-/// never a tie (the oracle drops it at construction; the light pass discards its fragments).
+/// never a tie (the oracle drops it at construction; the light pass culls it in its geometry stage).
 inline constexpr double kDegenerateRelativeArea = 1e-12;
 
 inline bool degenerateTriangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2) {

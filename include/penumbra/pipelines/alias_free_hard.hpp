@@ -374,6 +374,7 @@ inline uint64_t afhSpilledTriangles(const AliasFreeHardOptions& options, const S
     uint64_t spilled = 0;
     for (size_t t = 0; t < casters.closed->size(); ++t) {
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
+        if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
         if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
         spilled += conservativeNeedsSpill(light.view_projection * glm::vec4(v[0], 1.0f),
                                           light.view_projection * glm::vec4(v[1], 1.0f),
@@ -407,7 +408,7 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
     const auto& I = *casters.indices;
     for (size_t t = 0; t < casters.closed->size(); ++t) {
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
-        // The shared degenerate-triangle rule (the oracle drops these; the light pass discards them).
+        // The shared degenerate-triangle rule (the oracle drops these; the light pass culls them in its geometry stage).
         if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
         if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
         const glm::vec4 clip[3] = {light.view_projection * glm::vec4(v[0], 1.0f),

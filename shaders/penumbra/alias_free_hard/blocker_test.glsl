@@ -24,6 +24,8 @@
 #ifndef PENUMBRA_AFH_BLOCKER_TEST_GLSL
 #define PENUMBRA_AFH_BLOCKER_TEST_GLSL
 
+#include "penumbra/alias_free_hard/degenerate.glsl"
+
 #ifndef PENUMBRA_AFH_EXACT
 #define PENUMBRA_AFH_EXACT 1
 #endif
@@ -147,28 +149,6 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
 // The light point of a sample: the point light itself, or `reach` along a directional light's
 // unit vector `light` from p. The fp64-only path and the filter's fallback both use this one
 // function (precise: no FMA), so both see the same double l.
-// The one degenerate-triangle rule (penumbra::detail::degenerateTriangle, shared with the oracle
-// and the CPU twin): |(v1 - v0) x (v2 - v0)| <= 1e-12 * (longest edge)^2, compared squared, in
-// double. A degenerate triangle never blocks; the light pass discards its fragments.
-bool penumbraAfhDegenerate(dvec3 v0, dvec3 v1, dvec3 v2) {
-    precise dvec3 e0 = v1 - v0;
-    precise dvec3 e1 = v2 - v1;
-    precise dvec3 e2 = v0 - v2;
-    precise dvec3 e02 = v2 - v0;
-    precise double l0 = e0.x * e0.x + e0.y * e0.y;
-    l0 = l0 + e0.z * e0.z;
-    precise double l1 = e1.x * e1.x + e1.y * e1.y;
-    l1 = l1 + e1.z * e1.z;
-    precise double l2 = e2.x * e2.x + e2.y * e2.y;
-    l2 = l2 + e2.z * e2.z;
-    const double longest2 = max(l0, max(l1, l2));
-    precise dvec3 n = dvec3(e0.y * e02.z - e02.y * e0.z, e0.z * e02.x - e02.z * e0.x, e0.x * e02.y - e02.x * e0.y);
-    precise double nn = n.x * n.x + n.y * n.y;
-    nn = nn + n.z * n.z;
-    precise double limit = 1e-12LF * longest2;
-    return nn <= limit * limit;
-}
-
 penumbraAfhVec3 penumbraAfhLightPoint(penumbraAfhVec3 p, penumbraAfhVec3 light, penumbraAfhReal reach, bool point_light) {
     precise penumbraAfhVec3 t = light * reach;
     precise penumbraAfhVec3 l = p + t;

@@ -53,8 +53,6 @@ void main() {
     // Pixels outside the triangle's pixel-expanded bounding box cannot hold a blocked sample.
     if (!penumbraConservativeInsideBox(gl_FragCoord.xy, penumbraAfhBox)) discard;
 #endif
-    // Degenerate casters block nothing (the oracle's rule, shared: penumbraAfhDegenerate).
-    if (penumbraAfhDegenerate(dvec3(penumbraAfhVertex0), dvec3(penumbraAfhVertex1), dvec3(penumbraAfhVertex2))) discard;
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
     const float reach = penumbraAfhParams.tolerance.z;
     const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's

@@ -26,6 +26,7 @@
 // penumbra-permutation: PENUMBRA_AFH_EXACT=0 PENUMBRA_CONSERVATIVE_EXACT=0 PENUMBRA_CONSERVATIVE_SPILL_DRAW=1 PENUMBRA_AFH_COUNT_WORK=1
 #include "penumbra/conservative_raster/conservative_raster_shared.h"
 #include "penumbra/alias_free_hard/alias_free_hard_shared.h"
+#include "penumbra/alias_free_hard/degenerate.glsl"
 
 #ifndef PENUMBRA_AFH_EXACT
 #define PENUMBRA_AFH_EXACT 1
@@ -133,6 +134,9 @@ void main() {
     penumbraAfhTriangle[0] = penumbraAfhWorld[0];
     penumbraAfhTriangle[1] = penumbraAfhWorld[1];
     penumbraAfhTriangle[2] = penumbraAfhWorld[2];
+    // Degenerate casters block nothing (the oracle's rule, shared): culled once per triangle here,
+    // before any spill, rather than per fragment.
+    if (penumbraAfhDegenerate(dvec3(penumbraAfhWorld[0]), dvec3(penumbraAfhWorld[1]), dvec3(penumbraAfhWorld[2]))) return;
     if ((penumbraAfhParams.grid.w & PENUMBRA_AFH_FLAG_CLOSED) != 0u) {
         // §3.3: of a closed caster only the light-back-facing triangles cast. Decided in double:
         // a triangle wrongly culled here would be a missing blocker. Edge-on triangles (facing
