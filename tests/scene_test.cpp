@@ -712,6 +712,12 @@ TEST_CASE("obj: the validating pass names the line and the value") {
     CHECK(scene.meshes[0].name == "good");
     CHECK(scene.meshes[0].triangleCount() == 1);
     CHECK(scene.meshes[0].bounds().max == glm::vec3(1, 1, 0));
+    // Exponents tinyobjloader's own parser would overflow int on (found by obj_fuzz): the
+    // values reach it re-printed, so a zero with a huge exponent is zero and 12e-1 is 1.2.
+    const Scene exponents = parseObj("v 0e-2147483648 0 0\nv 10e-1 0e2147483647 0\nv 0 12e-1 0\nf 1 2 3\n",
+                                     "exponents.obj", ObjOptions{false, false});
+    REQUIRE(exponents.meshes.size() == 1);
+    CHECK(exponents.meshes[0].bounds().max == glm::vec3(1, 1.2f, 0));
     // parseObj and loadObj agree.
     CHECK(sameMesh(objectOf(parseObj(kQuadCubeObj, "quad_cube.obj")),
                    objectOf(loadObj(dir.write("quad_cube.obj", kQuadCubeObj)))));

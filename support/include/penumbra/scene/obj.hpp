@@ -26,7 +26,9 @@
 // 0, overflow int, or lie outside the vertices / texture coordinates / normals of the file
 // (negative = relative to those defined so far), and faces of more than 255 corners. Only
 // `v`, `vt`, `vn`, `f`, `o` and `g` statements reach tinyobjloader; everything else (materials,
-// smoothing groups, lines, points, tinyobjloader's `vw`/`t` extensions) is ignored.
+// smoothing groups, lines, points, tinyobjloader's `vw`/`t` extensions) is ignored; `v`/`vt`/`vn`
+// values reach it re-printed in shortest round-trip form, never as the file's text (its number
+// parser overflows int on exponents like `0e-2147483648`, found by obj_fuzz).
 // Failures throw penumbra::Error naming the path (or parseObj's name) and the reason; nothing
 // else escapes (tests/fuzz/obj_fuzz.cpp checks that on arbitrary bytes).
 #ifndef PENUMBRA_SCENE_OBJ_HPP
@@ -200,6 +202,14 @@ inline bool parseObjNumber(std::string_view token, double& value, bool& out_of_r
     const char* first = token.data() + (token[0] == '+' ? 1 : 0);  // from_chars takes no '+'
     const std::from_chars_result result = std::from_chars(first, token.data() + n, value);
     if (result.ec == std::errc::result_out_of_range) {
+        // A zero mantissa with a huge exponent (0e-99999) is zero, not out of range.
+        bool zero = true;
+        for (size_t k = 0; k < n && token[k] != 'e' && token[k] != 'E'; ++k)
+            if (token[k] >= '1' && token[k] <= '9') zero = false;
+        if (zero) {
+            value = token[0] == '-' ? -0.0 : 0.0;
+            return true;
+        }
         out_of_range = true;
         return true;
     }
@@ -270,6 +280,9 @@ inline std::string validateObjText(const std::string& text, const std::string& w
             const size_t count = tokens.size() - 1;
             const size_t min_count = kind == 1 ? 1 : 3, max_count = kind == 0 ? 7 : 3;
             const size_t number = defined[kind] + 1;
+            // tinyobjloader gets the values re-printed (shortest round-trip form), never the
+            // file's text: its own number parser overflows int on long exponents.
+            out.append(keyword.data(), keyword.size());
             if (count < min_count)
                 failAt("'", keyword, "' (", kKinds[kind], " ", number, ") needs ", min_count == 1 ? "a value" : "3 coordinates",
                        ", found ", count);
@@ -289,8 +302,14 @@ inline std::string validateObjText(const std::string& text, const std::string& w
                 if (out_of_range || std::abs(value) > double(FLT_MAX))
                     failAt(kKinds[kind], " ", number, " has a NaN or infinite coordinate: ", quoteObjToken(tokens[t]),
                            " is beyond float range");
+                char printed[32];
+                const std::to_chars_result written = std::to_chars(printed, printed + sizeof printed, value);
+                out += ' ';
+                out.append(printed, written.ptr);
             }
             ++defined[kind];
+            out += '\n';
+            continue;
         } else if (keyword == "f") {
             if (tokens.size() - 1 > 255) failAt("a face of ", tokens.size() - 1, " corners (at most 255)");
             for (size_t t = 1; t < tokens.size(); ++t) {
