@@ -3,6 +3,7 @@
 // GL loader on its include path, and a GL header slipping in is an #error. (The conservative
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
 #include <penumbra/buffer_range.hpp>
+#include <penumbra/light_lut.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>

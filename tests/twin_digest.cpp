@@ -12,6 +12,7 @@
 //
 // Usage: twin_digest   (lines starting with "#" describe the build and are not compared)
 #include <penumbra/conservative_raster.hpp>
+#include <penumbra/light_lut.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/sample_lists.hpp>
@@ -317,6 +318,41 @@ void oracleTwin() {
     print("VisibilityOracle::closestHit(id)", verdicts);
 }
 
+// ---- light-sample LUT ---------------------------------------------------------------------------
+
+void lutTwins() {
+    // The setup's cells and samples, the generated tables (both mappings, certified) and the float
+    // and double lookups: the GPU generator reads the setup's arrays, so they must not move either.
+    // (sphereLightSamples is contraction-proof by construction: explicit fma.)
+    const std::vector<glm::dvec3> samples = penumbra::reference::sphereLightSamples(glm::dvec3(0.0), 0.999, 160, 5);
+    const std::vector<glm::dvec3> planes = twin_digest::makePoints(13, 4000, glm::dvec3(-1.2), glm::dvec3(1.2));
+    Digest setup_d, table_d, locate_f, locate_d, exact_f;
+    for (const auto mapping : {penumbra::LutNormalMapping::Octahedral, penumbra::LutNormalMapping::Spherical}) {
+        penumbra::LightLutOptions options;
+        options.resolution = 16;
+        options.mapping = mapping;
+        options.certified = true;
+        const penumbra::LightLutSetup setup = penumbra::lightLutSetup(samples, 160, options);
+        setup_d.add(setup.samples);
+        setup_d.add(setup.normal_cells);
+        setup_d.add(setup.distance_cells);
+        table_d.add(penumbra::generateLightLut(setup, penumbra::LutProgress{}, 1));
+        for (size_t i = 0; i + 1 < planes.size(); i += 2) {
+            const glm::dvec4 plane(planes[i], planes[i + 1].x);
+            const penumbra::LutCell f = penumbra::lightLutLocate(setup.params, glm::vec4(plane));
+            const penumbra::LutCell d = penumbra::lightLutLocate(setup.params, plane);
+            locate_f.add(f.texel), locate_f.add(f.trivial), locate_f.add(static_cast<uint8_t>(f.flip));
+            locate_d.add(d.texel), locate_d.add(d.trivial), locate_d.add(static_cast<uint8_t>(d.flip));
+            exact_f.add(penumbra::exactBehind(setup, 1, glm::vec4(plane)));
+        }
+    }
+    print("lightLutSetup", setup_d);
+    print("generateLightLut", table_d);
+    print("lightLutLocate<float>", locate_f);
+    print("lightLutLocate<double>", locate_d);
+    print("exactBehind<float>", exact_f);
+}
+
 // ---- helpers the twins call, on identical inputs: which function changes bits ------------------
 
 void helperProbes() {
@@ -374,6 +410,7 @@ int main() {
     conservativeTwins();
     hardShadowTwins();
     oracleTwin();
+    lutTwins();
     helperProbes();
     return 0;
 }

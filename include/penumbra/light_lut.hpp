@@ -153,7 +153,14 @@ inline glm::dvec3 octahedronPoint(double u, double v) {
     return {std::copysign(1.0 - std::fabs(v), u), std::copysign(1.0 - std::fabs(u), v), z};
 }
 
-inline glm::dvec3 unit(const glm::dvec3& p) { return p / std::sqrt(glm::dot(p, p)); }
+// The setup's arithmetic keeps products opaque (detail::mulRounded) like the texel function: the
+// cells must not change with -ffp-contract / -mfma (tests/twin_digest).
+inline glm::dvec3 unit(const glm::dvec3& p) { return p / std::sqrt(dotRounded(p, p)); }
+
+inline double chord(const glm::dvec3& a, const glm::dvec3& b) {
+    const glm::dvec3 d = a - b;
+    return std::sqrt(dotRounded(d, d));
+}
 
 /// Normal cell (i, j) of the octahedral map: centre normal, and the largest chord from it to the
 /// cell's normals. The cell (R even: it never straddles u = 0 or v = 0) maps to at most two planar
@@ -165,16 +172,16 @@ inline glm::dvec4 octahedralCell(uint32_t i, uint32_t j, uint32_t r) {
     const double uc = 0.5 * (u0 + u1), vc = 0.5 * (v0 + v1);
     const glm::dvec3 centre = unit(octahedronPoint(uc, vc));
     double rho = 0.0;
-    auto reach = [&](double u, double v) { rho = std::max(rho, glm::length(unit(octahedronPoint(u, v)) - centre)); };
+    auto reach = [&](double u, double v) { rho = std::max(rho, chord(unit(octahedronPoint(u, v)), centre)); };
     reach(u0, v0), reach(u1, v0), reach(u0, v1), reach(u1, v1);
     const double su = uc < 0 ? -1.0 : 1.0, sv = vc < 0 ? -1.0 : 1.0;
     // Fold su u + sv v = 1 against the four edges.
     for (double u : {u0, u1}) {
-        const double v = sv * (1.0 - su * u);
+        const double v = sv * (1.0 - mulRounded(su, u));
         if (v > v0 && v < v1) reach(u, v);
     }
     for (double v : {v0, v1}) {
-        const double u = su * (1.0 - sv * v);
+        const double u = su * (1.0 - mulRounded(sv, v));
         if (u > u0 && u < u1) reach(u, v);
     }
     return {centre, rho};
@@ -192,7 +199,7 @@ inline glm::dvec4 sphericalCell(uint32_t i, uint32_t j, uint32_t r) {
     ls::cosSinTurns(phi_turns, cos_phi, sin_phi);
     const glm::dvec3 centre(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta);
     const double half_theta = kPi / (2.0 * r), half_phi = kPi / r;
-    return {centre, half_theta + sin_theta * half_phi};
+    return {centre, half_theta + mulRounded(sin_theta, half_phi)};
 }
 
 /// The texel function both generators evaluate (fp64 +, *, compares; products rounded).
@@ -266,7 +273,7 @@ inline LightLutSetup lightLutSetup(const glm::dvec3* local, uint32_t samples_per
             const glm::dvec3 q = local[size_t(s) * samples_per_set + i];
             PENUMBRA_CHECK(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z), "lightLutSetup: sample ", i,
                            " of set ", s, " is not finite (", q.x, ", ", q.y, ", ", q.z, ")");
-            const double length = std::sqrt(glm::dot(q, q));
+            const double length = std::sqrt(detail::dotRounded(q, q));
             PENUMBRA_CHECK(length <= ll::kMaxSampleRadius, "lightLutSetup: sample ", i, " of set ", s,
                            " lies at |q| = ", length, ", outside the normalised light (|q| <= 1 - 2^-20)");
             // |q| rounded up: the bound rho * |q| must not undershoot.
@@ -279,20 +286,21 @@ inline LightLutSetup lightLutSetup(const glm::dvec3* local, uint32_t samples_per
     // or 2 tolerance (two angles); in d and in the sample position by tolerance each; 1e-12 covers
     // the rounding of the fp64 evaluation (all terms are below 4).
     const double rounding = 1e-12;
-    const double normal_slack = options.mapping == LutNormalMapping::Octahedral ? 3.0 * std::sqrt(2.0) * options.tolerance
+    const double normal_slack = options.mapping == LutNormalMapping::Octahedral ? (3.0 * std::sqrt(2.0)) * options.tolerance
                                                                                  : 2.0 * options.tolerance;
     setup.normal_cells.resize(size_t(r) * r);
     for (uint32_t j = 0; j < r; ++j)
         for (uint32_t i = 0; i < r; ++i) {
             glm::dvec4 cell = options.mapping == LutNormalMapping::Octahedral ? ll::octahedralCell(i, j, r)
                                                                              : ll::sphericalCell(i, j, r);
-            cell.w = cell.w * (1.0 + 1e-12) + normal_slack + rounding;
+            cell.w = (detail::mulRounded(cell.w, 1.0 + 1e-12) + normal_slack) + rounding;
             setup.normal_cells[size_t(j) * r + i] = cell;
         }
     setup.distance_cells.resize(r);
     const double lo = options.symmetric ? 0.0 : -1.0, width = (options.symmetric ? 1.0 : 2.0) / r;
     for (uint32_t k = 0; k < r; ++k)
-        setup.distance_cells[k] = glm::dvec2(lo + (k + 0.5) * width, 0.5 * width + 2.0 * options.tolerance + rounding);
+        setup.distance_cells[k] = glm::dvec2(lo + detail::mulRounded(k + 0.5, width),
+                                             (0.5 * width + 2.0 * options.tolerance) + rounding);
     return setup;
 }
 
