@@ -308,3 +308,29 @@ TEST_CASE("light lut: progress reaches 1 and cancellation stops") {
     CHECK(contains(errorOf([&] { penumbra::generateLightLut(setup, [](double) { return false; }); }), "cancelled"));
     CHECK(contains(errorOf([&] { penumbra::generateLightLut(setup, out.data(), 5); }), "needs"));
 }
+
+TEST_CASE("light lut: a rotated plane answers for rotated samples") {
+    penumbra::LightLutOptions options;
+    options.resolution = 32;
+    options.certified = true;
+    const std::vector<dvec3> samples = diskSet(128);
+    const penumbra::LightLutSetup setup = penumbra::lightLutSetup(samples, 128, options);
+    const std::vector<uint32_t> lut = penumbra::generateLightLut(setup);
+    std::mt19937_64 rng(penumbra::test::testSeed());
+    std::uniform_real_distribution<double> angle(0.0, 6.283185307179586);
+    for (int k = 0; k < 24; ++k) {  // a setup per angle: a few dozen angles
+        const double a = angle(rng), c = std::cos(a), s = std::sin(a);
+        // The samples rotated by a about z, and the exact mask of a random plane on them.
+        std::vector<dvec3> rotated(samples.size());
+        for (size_t i = 0; i < samples.size(); ++i)
+            rotated[i] = dvec3(c * samples[i].x - s * samples[i].y, s * samples[i].x + c * samples[i].y, samples[i].z);
+        const penumbra::LightLutSetup rotated_setup = penumbra::lightLutSetup(rotated, 128, options);
+        const dvec4 plane = randomPlane(rng);
+        const penumbra::LutMask exact = penumbra::exactBehind(rotated_setup, 0, plane);
+        const dvec4 turned = penumbra::lightLutRotate(plane, c, s);
+        const penumbra::LutCertain certain = penumbra::lutCertain(penumbra::lightLutLookup(setup.params, lut.data(), 0, turned));
+        // Certain bits of the unrotated table are right for the rotated samples (up to the
+        // rotation's rounding, far below the tolerance).
+        REQUIRE(andNot(xorMask(certain.behind, exact), certain.uncertain) == penumbra::LutMask{});
+    }
+}

@@ -499,6 +499,18 @@ inline LutAnswer lightLutLookup(const shared::PenumbraLutParams& p, const uint32
     return answer;
 }
 
+/// Per-pixel rotation of a rotationally symmetric light's samples (sintorn2008 §4.2: "rotating the
+/// normal around the symmetry axes ... jittering at almost no cost"): the samples rotated by angle
+/// a about local z are behind `plane` exactly when the unrotated ones are behind the returned plane,
+/// whose normal is rotated by -a. cos_a, sin_a: of the angle (light_samples.hpp's
+/// lightSampleRotationTurns gives it per pixel and frame). Twin of penumbraLutRotate.
+template <typename Real>
+inline glm::vec<4, Real> lightLutRotate(const glm::vec<4, Real>& plane, Real cos_a, Real sin_a) {
+    using detail::mulRounded;
+    return {mulRounded(cos_a, plane.x) + mulRounded(sin_a, plane.y), mulRounded(cos_a, plane.y) - mulRounded(sin_a, plane.x),
+            plane.z, plane.w};
+}
+
 /// The ground truth: bits of the samples of table `table` strictly behind the plane (n need not
 /// be unit: only the sign of dot(n, q) + w counts). CPU twin of penumbraExactBehind.
 template <typename Real>
