@@ -615,9 +615,11 @@ inline uint32_t lightSampleHash32(uint32_t v) {
     return v;
 }
 
-/// The 32-bit rotation hash of (x, y, frame, seed): hash32(x + hash32(y + hash32(frame + hash32(seed)))).
+/// The 32-bit rotation hash of (x, y, frame, seed):
+/// hash32(x + hash32(y + hash32(frame + hash32(seed + 0x9e3779b9)))).
 inline uint32_t lightSampleRotationHash(uint32_t x, uint32_t y, uint32_t frame, uint32_t seed) {
-    return lightSampleHash32(x + lightSampleHash32(y + lightSampleHash32(frame + lightSampleHash32(seed))));
+    const uint32_t h = lightSampleHash32(seed + PENUMBRA_LIGHT_SAMPLES_HASH_SEED_OFFSET);
+    return lightSampleHash32(x + lightSampleHash32(y + lightSampleHash32(frame + h)));
 }
 
 /// Rotation about local z for symmetric lights, in turns [0,1): 32-bit integer hash * 2^-32.

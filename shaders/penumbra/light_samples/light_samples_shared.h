@@ -15,8 +15,10 @@
 // (sets / golden ratio), made odd, clamped to [2, sets - 2] (sets >= 4).
 #define PENUMBRA_LIGHT_SAMPLES_STRIDE_NUMERATOR 40503
 
-// The rotation hash: Chris Wellons' "lowbias32" integer finaliser, nested over seed, frame, y, x.
+// The rotation hash: Chris Wellons' "lowbias32" integer finaliser, nested over seed, frame, y, x;
+// the seed is offset first (lowbias32(0) = 0 would leave pixel (0, 0) of frame 0 unrotated).
 #define PENUMBRA_LIGHT_SAMPLES_HASH_M1 0x7feb352du
 #define PENUMBRA_LIGHT_SAMPLES_HASH_M2 0x846ca68bu
+#define PENUMBRA_LIGHT_SAMPLES_HASH_SEED_OFFSET 0x9e3779b9u
 
 #endif
