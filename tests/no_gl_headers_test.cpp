@@ -4,6 +4,7 @@
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
 #include <penumbra/buffer_range.hpp>
 #include <penumbra/light_lut.hpp>
+#include <penumbra/light_samples.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
@@ -52,6 +53,10 @@ TEST_CASE("cpu: the GL-free headers plan, validate and run their CPU twins witho
     const auto c = penumbra::reference::compareHardStates(oracle, positions, states, penumbra::reference::hardLight(light.light));
     CHECK(c.mismatched == 0);
     CHECK(c.samples == 2);
+    // Light-sample sets: the oracle's world samples and the LUT's local ones.
+    const penumbra::LightSampleSets light_sets = penumbra::makeLightSampleSets(penumbra::Light{});
+    CHECK(light_sets.world.size() == light_sets.local.size());
+    CHECK(penumbra::lightSampleSet(1, 2, 3, light_sets.sets()) < light_sets.sets());
     // Status is plain C++ too.
     CHECK(std::string(penumbra::statusName(penumbra::Status::RangeTooSmall)) == "range too small");
 }

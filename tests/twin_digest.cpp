@@ -13,6 +13,7 @@
 // Usage: twin_digest   (lines starting with "#" describe the build and are not compared)
 #include <penumbra/conservative_raster.hpp>
 #include <penumbra/light_lut.hpp>
+#include <penumbra/light_samples.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/sample_lists.hpp>
@@ -353,6 +354,48 @@ void lutTwins() {
     print("exactBehind<float>", exact_f);
 }
 
+// ---- light samples (penumbra/light_samples.hpp): sets, frames, planes, selection ---------------
+
+void lightSampleTwins() {
+    Digest sets_d, reference_d, planes_d, select_d;
+    uint32_t seed = 1;
+    for (uint32_t shape = 0; shape < 4; ++shape)
+        for (uint32_t pattern = 0; pattern < 2; ++pattern) {
+            penumbra::Light light;
+            light.shape = static_cast<penumbra::LightShape>(shape);
+            light.center = glm::dvec3(1.25, -3.5, 7.0) * double(shape + 1);
+            light.axis_z = glm::dvec3(0.3, -0.7, 1.1);
+            light.axis_x = glm::dvec3(1.0, 0.2, -0.1);
+            light.size = glm::dvec3(0.7, 0.3, 1.9);
+            penumbra::LightSampleOptions options;
+            options.count = 96;
+            options.sets = 5;
+            options.pattern = static_cast<penumbra::SamplePattern>(pattern);
+            options.seed = seed++;
+            const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, options);
+            sets_d.add(sets.local);
+            sets_d.add(sets.world);
+            for (const glm::dvec3& p : sets.world) sets_d.add(sets.frame.toLocal(p));
+            const std::vector<glm::dvec3> n = twin_digest::makePoints(20 + shape, 64, glm::dvec3(-1), glm::dvec3(1));
+            for (size_t i = 0; i + 1 < n.size(); i += 2) planes_d.add(sets.frame.planeToLocal(glm::dvec4(n[i], n[i + 1].x)));
+        }
+    reference_d.add(penumbra::reference::sphereLightSamples(glm::dvec3(1, 2, 3), 0.5, 1000, 42));
+    reference_d.add(penumbra::reference::diskLightSamples(glm::dvec3(-1, 0.5, 2), glm::dvec3(0.3, -0.2, 1), 0.75, 1000, 7));
+    reference_d.add(penumbra::reference::rectLightSamples(glm::dvec3(0.1, 0.2, 0.3), glm::dvec3(1.1, 0.1, 0),
+                                                          glm::dvec3(0, 0.3, 0.9), 13, 7));
+    for (uint32_t f = 0; f < 4; ++f)
+        for (uint32_t y = 0; y < 64; ++y)
+            for (uint32_t x = 0; x < 64; ++x) {
+                select_d.add(penumbra::lightSampleSet(x, y, f, 1 + (x ^ y) % 64));
+                select_d.add(penumbra::lightSampleRotationTurns(x, y, f, 9));
+                select_d.add(penumbra::lightSampleRotationTurnsFloat(x, y, f, 9));
+            }
+    print("makeLightSampleSets/LightFrame", sets_d);
+    print("LightFrame::planeToLocal", planes_d);
+    print("reference::*LightSamples", reference_d);
+    print("lightSampleSet/RotationTurns", select_d);
+}
+
 // ---- helpers the twins call, on identical inputs: which function changes bits ------------------
 
 void helperProbes() {
@@ -411,6 +454,7 @@ int main() {
     hardShadowTwins();
     oracleTwin();
     lutTwins();
+    lightSampleTwins();
     helperProbes();
     return 0;
 }

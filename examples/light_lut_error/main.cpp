@@ -2,7 +2,8 @@
 // uncertain, against the exact test, over random planes through random points near the light.
 //
 //   light_lut_error [--resolutions 32,64,128,256] [--samples 128,512,1024] [--planes 1000000]
-//                   [--shape sphere|disk] [--mapping octahedral|spherical] [--asymmetric]
+//                   [--shape sphere|disk|rectangle|ellipsoid] [--pattern stratified|low-discrepancy]
+//                   [--mapping octahedral|spherical] [--asymmetric]
 //                   [--seed S] [--json out.json]
 //
 // For each (resolution, N) it builds the certified LUT (or, when the table would exceed --max-table
@@ -15,7 +16,7 @@
 // as fractions of all sample bits, and of the bits of planes that cut the bounding sphere.
 // Planes: normal uniform on the sphere, through a point uniform in [-1.5, 1.5]^3 (light units).
 #include <penumbra/light_lut.hpp>
-#include <penumbra/reference/light_samples.hpp>
+#include <penumbra/light_samples.hpp>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -63,6 +64,7 @@ std::vector<uint32_t> parseList(const std::string& text) {
 int main(int argc, char** argv) {
     CLI::App app{"light_lut_error: wrong and uncertain bits of the light-sample LUT vs the exact test"};
     std::string resolutions = "32,64,128,256", sample_counts = "128,512,1024", shape = "sphere", mapping = "octahedral";
+    std::string pattern = "stratified";
     std::string json_path;
     uint64_t planes = 1000000, max_table = 1ull << 30;
     uint32_t seed = 1;
@@ -70,7 +72,9 @@ int main(int argc, char** argv) {
     app.add_option("--resolutions", resolutions, "comma-separated R (R^3 texels per table)");
     app.add_option("--samples", sample_counts, "comma-separated N (multiples of 32, <= 1024)");
     app.add_option("--planes", planes, "random planes per configuration");
-    app.add_option("--shape", shape, "light samples: sphere (ball) or disk")->check(CLI::IsMember({"sphere", "disk"}));
+    app.add_option("--shape", shape, "light shape (light_samples.hpp; ellipsoid 1 x 0.5 x 0.25, rectangle 1 x 0.5)")
+        ->check(CLI::IsMember({"sphere", "disk", "rectangle", "ellipsoid"}));
+    app.add_option("--pattern", pattern, "light-sample pattern")->check(CLI::IsMember({"stratified", "low-discrepancy"}));
     app.add_option("--mapping", mapping, "normal mapping")->check(CLI::IsMember({"octahedral", "spherical"}));
     app.add_flag("--asymmetric", asymmetric, "store d in [-1, 1] instead of using the (n, d) <-> (-n, -d) symmetry");
     app.add_option("--seed", seed, "plane and sample seed");
@@ -81,9 +85,20 @@ int main(int argc, char** argv) {
     std::vector<Row> rows;
     try {
         for (const uint32_t n : parseList(sample_counts)) {
-            const std::vector<dvec3> samples =
-                shape == "sphere" ? penumbra::reference::sphereLightSamples(dvec3(0.0), 0.999, n, seed)
-                                  : penumbra::reference::diskLightSamples(dvec3(0.0), dvec3(0, 0, 1), 0.999, n, seed);
+            // One set of N samples of the light, in its normalised space (what the LUT indexes).
+            penumbra::Light light;
+            light.shape = shape == "sphere"      ? penumbra::LightShape::Sphere
+                          : shape == "disk"      ? penumbra::LightShape::Disk
+                          : shape == "rectangle" ? penumbra::LightShape::Rectangle
+                                                 : penumbra::LightShape::Ellipsoid;
+            light.size = shape == "ellipsoid" ? dvec3(1.0, 0.5, 0.25) : shape == "rectangle" ? dvec3(1.0, 0.5, 0.0) : dvec3(1.0);
+            penumbra::LightSampleOptions sample_options;
+            sample_options.count = n;
+            sample_options.sets = 1;
+            sample_options.seed = seed;
+            sample_options.pattern =
+                pattern == "stratified" ? penumbra::SamplePattern::Stratified : penumbra::SamplePattern::LowDiscrepancy;
+            const std::vector<dvec3> samples = penumbra::makeLightSampleSets(light, sample_options).local;
             for (const uint32_t r : parseList(resolutions)) {
                 penumbra::LightLutOptions options;
                 options.resolution = r;
@@ -155,7 +170,7 @@ int main(int argc, char** argv) {
         return 1;
     }
 
-    std::printf("shape %s, mapping %s, %s, %llu planes per row\n", shape.c_str(), mapping.c_str(),
+    std::printf("shape %s (%s), mapping %s, %s, %llu planes per row\n", shape.c_str(), pattern.c_str(), mapping.c_str(),
                 asymmetric ? "d in [-1, 1]" : "symmetric (d in [0, 1])", static_cast<unsigned long long>(planes));
     std::printf("| R | N | table MiB | cut | wrong (seed) | uncertain (certified) | wrong certain | conservative wrong | wrong / cut | uncertain / cut |\n");
     std::printf("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
@@ -181,7 +196,7 @@ int main(int argc, char** argv) {
                        {"measure_seconds", row.measure_seconds}});
     }
     if (!json_path.empty()) {
-        nlohmann::ordered_json doc = {{"shape", shape}, {"mapping", mapping}, {"symmetric", !asymmetric},
+        nlohmann::ordered_json doc = {{"shape", shape}, {"pattern", pattern}, {"mapping", mapping}, {"symmetric", !asymmetric},
                                       {"planes", planes}, {"seed", seed}, {"rows", out}};
         std::ofstream(json_path) << doc.dump(2) << "\n";
     }

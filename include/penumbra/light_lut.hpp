@@ -69,7 +69,7 @@
 #include "penumbra/detail/float_ops.hpp"
 #include "penumbra/detail/shared.hpp"
 #include "penumbra/error.hpp"
-#include "penumbra/reference/light_samples.hpp"
+#include "penumbra/light_samples.hpp"
 
 #if __has_include(<penumbra/light_lut/light_lut_shared.h>)
 #include <penumbra/light_lut/light_lut_shared.h>
@@ -320,6 +320,11 @@ inline LightLutSetup lightLutSetup(const std::vector<glm::dvec3>& local, uint32_
     PENUMBRA_CHECK(samples_per_set > 0 && !local.empty() && local.size() % samples_per_set == 0,
                    "lightLutSetup: ", local.size(), " samples are not whole sets of ", samples_per_set);
     return lightLutSetup(local.data(), samples_per_set, static_cast<uint32_t>(local.size() / samples_per_set), options);
+}
+
+/// From light_samples.hpp's sets: their local samples (already inside |q| <= 1 - 2^-20).
+inline LightLutSetup lightLutSetup(const LightSampleSets& sets, const LightLutOptions& options = {}) {
+    return lightLutSetup(sets.local, sets.count(), options);
 }
 
 /// One texel of one table, as both generators compute it.

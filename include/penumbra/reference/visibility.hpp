@@ -2,8 +2,8 @@
 //
 // Integration summary
 //   Needs:    a triangle list (positions as glm::dvec3 or glm::vec3, uint32 indices, 3 per
-//             triangle), receiver points and light samples (reference/light_samples.hpp gives
-//             deterministic sets). Header-only: GLM, the C++17 standard library, std::thread.
+//             triangle), receiver points and light samples (penumbra/light_samples.hpp gives
+//             deterministic sets: LightSampleSets::world, or reference/light_samples.hpp's). Header-only: GLM, the C++17 standard library, std::thread.
 //             No GPU, no GL; requires IEEE-754 double arithmetic (SSE2 on x86, any 64-bit ARM);
 //             not valid under -ffast-math.
 //   Produces: for every (receiver, light sample) pair one "blocked" bit and one "tie" bit, packed
