@@ -374,10 +374,11 @@ TEST_CASE("LightLutGenerator: the RGBA32UI 3D texture helper copies one table") 
     CHECK(contains(errorOf([&] { penumbra::uploadLightLutTexture(0, setup, table, 2); }), "table 2 of 2"));
 }
 
-TEST_CASE("lookup.glsl: GLSL lookups equal the CPU twins bit for bit; certified + resolve is exact") {
+namespace {
+
+void lookupIdentity(size_t count) {
     context();
     const uint32_t seed = penumbra::test::testSeed();
-    const size_t count = std::getenv("PENUMBRA_STRESS") ? 200000 : 20000;
     std::mt19937_64 rng(seed);
     const std::vector<glm::vec4> planes = testPlanes(rng, count);
     const std::vector<glm::vec2> rotations = testRotations(rng, count);
@@ -421,6 +422,12 @@ TEST_CASE("lookup.glsl: GLSL lookups equal the CPU twins bit for bit; certified 
         }
         if (c.options.certified) CHECK(t.resolved_not_exact == 0);
     }
+}
+
+}  // namespace
+
+TEST_CASE("lookup.glsl: GLSL lookups equal the CPU twins bit for bit; certified + resolve is exact") {
+    lookupIdentity(20000);
 }
 
 TEST_CASE("LightLutGenerator: setup errors and per-call misuse") {
@@ -500,6 +507,8 @@ TEST_CASE("lookup.glsl: a missing hook is a compile error naming it") {
 }
 
 TEST_SUITE("stress") {
+    TEST_CASE("lookup.glsl: GLSL lookups equal the CPU twins, 200 000 planes") { lookupIdentity(200000); }
+
     TEST_CASE("LightLutGenerator: GPU tables byte-identical at R 64") {
         context();
         penumbra::LightLutGenerator generator;
