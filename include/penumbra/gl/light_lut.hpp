@@ -13,9 +13,10 @@
 //             GL once (queries, throws penumbra::Error naming the value).
 //   per call: generate(setup, table) writes setup.texelCount() uvec4s into `table` in exactly the
 //             CPU layout (centre masks, then in certified mode the uncertain masks at
-//             params.uncertain_offset): the planned dispatches, each glBindBuffersRange x 5-6 +
-//             glProgramUniform4ui + glDispatchCompute, after one glUseProgram and one
-//             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT). No heap allocation, no glGet* / glIs* /
+//             params.uncertain_offset): three glBindBuffersRange (parameter block, normal and
+//             distance cells), one glUseProgram, one glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT),
+//             then per planned dispatch two or three glBindBuffersRange (the samples' and the
+//             output windows) + glProgramUniform4ui + glDispatchCompute. No heap allocation, no glGet* / glIs* /
 //             glGetError, no read-back, no exception. Misuse it can see without GL returns a Status
 //             after PENUMBRA_ASSERT and issues no GL call:
 //               NotReserved    no reserve(), or a setup whose parameter block or array sizes differ
