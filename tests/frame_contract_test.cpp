@@ -1,6 +1,6 @@
 // The per-frame contract (issue 7; docs/design.md, convention 2), recorded: after warm-up, every GL
-// call made inside Scanner::scan, SampleListBuilder::build and AliasFreeHardShadows::run (buffer
-// and depth input, with the GPU fit and statistics on) is logged through glad's debug loader
+// call made inside Scanner::scan, SampleListBuilder::build, AliasFreeHardShadows::run (buffer
+// and depth input, with the GPU fit and statistics on) and LightLutGenerator::generate is logged through glad's debug loader
 // (support/gl_audit.hpp) and the heap is counted (support/alloc_counter.hpp): 0 queries (glGet*,
 // glIs*, glCheck*Status), 0 glGetError, 0 read-backs, 0 maps, 0 glFinish / fence waits, 0 heap
 // allocations. A queued engine error survives each call. The same holds for the conservative
@@ -10,6 +10,7 @@
 #include "support/gl_test_support.hpp"
 
 #include <penumbra/gl/conservative_raster.hpp>
+#include <penumbra/gl/light_lut.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/gl/sample_lists.hpp>
 #include <penumbra/gl/scan.hpp>
@@ -186,5 +187,34 @@ TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast; Fi
         const Recorded misuse = record([&] { return pipeline.run(w.bufferInput(), w.samples() + 1, w.light, casters); });
         CHECK(misuse.status == Status::NotReserved);
         CHECK(misuse.calls == 0);
+    }
+}
+
+TEST_CASE("LightLutGenerator::generate: seed and certified, one and several dispatches") {
+    context();
+    const std::vector<glm::dvec3> samples = penumbra::reference::sphereLightSamples(glm::dvec3(0.0), 0.999, 160, 3);
+    for (const bool certified : {false, true}) {
+        penumbra::LightLutOptions options;
+        options.resolution = 16;
+        options.certified = certified;
+        const penumbra::LightLutSetup setup = penumbra::lightLutSetup(samples, 160, options);
+        penumbra::gl::Buffer table(setup.tableBytes());
+        for (const uint64_t window : {uint64_t(0), uint64_t(16u * 16u * 16u * 5u)}) {  // driver limits; slabs of 5
+            penumbra::LightLutGeneratorOptions limits;
+            limits.max_binding_bytes = window;
+            penumbra::LightLutGenerator generator(penumbra::ShaderLibrary::embedded(), {}, limits);
+            generator.reserve(setup);
+            generator.validate(setup, range(table));
+            const std::string name = std::string("LightLutGenerator::generate, ") + (certified ? "certified" : "seed") +
+                                     ", " + std::to_string(generator.dispatches().size()) + " dispatch(es)";
+            checkContract(record([&] { return generator.generate(setup, range(table)); }), name);
+            queueEngineError();
+            generator.generate(setup, range(table));
+            CHECK(glGetError() == GL_INVALID_ENUM);
+            const Recorded misuse = record([&] { return generator.generate(setup, {table.id(), 0, 16}); });
+            CHECK(misuse.status == Status::RangeTooSmall);
+            CHECK(misuse.calls == 0);
+            CHECK(misuse.allocations == 0);
+        }
     }
 }

@@ -25,7 +25,8 @@ namespace penumbra::shared {
 #define PENUMBRA_LUT_BINDING_SAMPLES 0       // dvec4 per sample: local x, y, z, |q| (rounded up)
 #define PENUMBRA_LUT_BINDING_NORMAL_CELLS 1  // dvec4 per normal cell: centre normal, rho
 #define PENUMBRA_LUT_BINDING_DISTANCE_CELLS 2  // dvec2 per distance cell: centre, half width + margins
-#define PENUMBRA_LUT_BINDING_TABLE 3         // uvec4 per texel: the tables (output)
+#define PENUMBRA_LUT_BINDING_TABLE 3         // uvec4 per texel: the centre masks (output)
+#define PENUMBRA_LUT_BINDING_UNCERTAIN 4     // uvec4 per texel: the uncertain masks (output, certified)
 #define PENUMBRA_LUT_BINDING_PARAMS 0        // uniform block PenumbraLutParamsBlock (std140)
 
 // The parameter block: what a lookup needs to locate a plane's cell, and what the generator needs

@@ -10,7 +10,7 @@
 //   uint  penumbraLightSampleRotationHash(uvec2 pixel, uint frame, uint seed)
 //   float penumbraLightSampleRotationTurns(uvec2 pixel, uint frame, uint seed)
 //         the hash's top 24 bits * 2^-24: in [0, 1), exact in float.
-// A snippet: no #version, no bindings, no hooks.
+// A snippet: no version line, no bindings, no hooks.
 #ifndef PENUMBRA_LIGHT_SAMPLES_SELECT_GLSL
 #define PENUMBRA_LIGHT_SAMPLES_SELECT_GLSL
 
