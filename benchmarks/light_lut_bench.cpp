@@ -54,14 +54,6 @@ int popcount(const penumbra::LutMask& m) {
     return c;
 }
 
-void generateArgs(benchmark::internal::Benchmark* b) {
-    if (penumbra::bench::smokeRun()) {
-        b->Args({16, 128});
-        return;
-    }
-    for (const auto& a : std::vector<std::vector<int64_t>>{{32, 128}, {64, 128}, {32, 512}, {64, 512}, {128, 128}}) b->Args(a);
-}
-
 void lookupArgs(benchmark::internal::Benchmark* b) {
     if (penumbra::bench::smokeRun()) {
         b->Args({16, 128});
@@ -70,8 +62,8 @@ void lookupArgs(benchmark::internal::Benchmark* b) {
     for (const auto& a : std::vector<std::vector<int64_t>>{{32, 128}, {64, 128}, {128, 128}, {64, 512}}) b->Args(a);
 }
 
-void BM_LutGenerateCpu(benchmark::State& state) {
-    const penumbra::LightLutSetup setup = benchSetup(uint32_t(state.range(0)), uint32_t(state.range(1)), true);
+void lutGenerateCpu(benchmark::State& state, int64_t resolution, int64_t n) {
+    const penumbra::LightLutSetup setup = benchSetup(uint32_t(resolution), uint32_t(n), true);
     std::vector<uint32_t> words(setup.texelCount() * 4);
     for (auto _ : state) {
         penumbra::generateLightLut(setup, words.data(), words.size());
@@ -83,9 +75,9 @@ void BM_LutGenerateCpu(benchmark::State& state) {
     state.counters["threads"] = double(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-void BM_LutGenerateGpu(benchmark::State& state) {
+void lutGenerateGpu(benchmark::State& state, int64_t resolution, int64_t n) {
     penumbra::bench::glContext();
-    const penumbra::LightLutSetup setup = benchSetup(uint32_t(state.range(0)), uint32_t(state.range(1)), true);
+    const penumbra::LightLutSetup setup = benchSetup(uint32_t(resolution), uint32_t(n), true);
     penumbra::LightLutGenerator generator;
     penumbra::gl::Buffer table(setup.tableBytes());
     const penumbra::BufferRange range{table.id(), 0, setup.tableBytes()};
@@ -107,8 +99,26 @@ void BM_LutGenerateGpu(benchmark::State& state) {
     state.counters["timer_gl_time_elapsed"] = penumbra::bench::timerCounter();
 }
 
-BENCHMARK(BM_LutGenerateCpu)->Apply(generateArgs)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_LutGenerateGpu)->Apply(generateArgs)->UseManualTime()->Unit(benchmark::kMillisecond);
+// The names: BM_LutGenerate/<res>/<N>/cpu and BM_LutGenerate/<res>/<N>/gpu.
+const bool kLutGenerateRegistered = [] {
+    std::vector<std::vector<int64_t>> sizes;
+    if (penumbra::bench::smokeRun()) {
+        sizes = {{16, 128}};
+    } else {
+        sizes = {{32, 128}, {64, 128}, {32, 512}, {64, 512}, {128, 128}};
+    }
+    for (const std::vector<int64_t>& size : sizes) {
+        const std::string name = "BM_LutGenerate/" + std::to_string(size[0]) + "/" + std::to_string(size[1]);
+        const int64_t r = size[0], n = size[1];
+        benchmark::RegisterBenchmark((name + "/cpu").c_str(), [r, n](benchmark::State& state) { lutGenerateCpu(state, r, n); })
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
+        benchmark::RegisterBenchmark((name + "/gpu").c_str(), [r, n](benchmark::State& state) { lutGenerateGpu(state, r, n); })
+            ->UseManualTime()
+            ->Unit(benchmark::kMillisecond);
+    }
+    return true;
+}();
 
 // ---- lookups on the device ----
 
