@@ -6,6 +6,7 @@
 #include <penumbra/light_lut.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/pipelines/sample_based_soft.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>

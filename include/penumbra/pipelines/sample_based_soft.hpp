@@ -1,0 +1,309 @@
+// penumbra/pipelines/sample_based_soft.hpp — sample-based soft shadows (sintorn2008 §4, Fig. 6):
+// per view sample an N-bit mask of the light samples its casters block, from the light-sample LUT.
+// This header holds the CPU twin of the pipeline's per-sample work (the GPU pipeline, which
+// rasterizes influence regions to find the (sample, caster) pairs, calls the same GLSL functions
+// per pair: lookup.glsl); no GL.
+//
+// Integration summary
+//   Needs:    GLM; light_samples.hpp (K sets of N samples, LightFrame), light_lut.hpp (a LUT built
+//             for those sets; certified for Exact), reference/visibility.hpp (the oracle's
+//             per-triangle segment verdict, for the samples the LUT cannot vouch for).
+//   Produces: sampleBasedSoftCpu(): per receiver the mask (bit s of word [r * W + s / 32]: light
+//             sample s of the receiver's set is blocked) and the work counters.
+//
+// Per (view sample p, caster triangle T) — sintorn2008 Fig. 6: the light samples T blocks for p
+// are those behind the three planes through p and T's edges and beyond T's plane. Each plane is
+// computed in double from the float inputs, mapped to the light's normalised space
+// (LightFrame::planeToLocal) and looked up; the four masks are ANDed, and the per-caster masks ORed.
+//   Lut:   the seed's approximation (centre sampling, penumbraLutBehind); casters the receiver lies
+//          on (the oracle's coplanar rule for every sample) are ignored, as in Exact.
+//   Exact: certified lookups (lutCertain / lutCombine); the uncertain bits are decided by the
+//          oracle's own per-triangle verdict (detail::oracle::classifySegment with the oracle's
+//          options), so the mask equals reference::VisibilityOracle::evaluate's bit for bit on every
+//          pair the oracle does not call a tie. Certain bits are only trusted where that is proven:
+//            - each plane carries a rounding bound (float inputs, double arithmetic, the change of
+//              frame) in normalised units; a plane whose bound exceeds half the LUT's tolerance
+//              counts as all-uncertain;
+//            - T is ignored for every light sample when p lies within the oracle's coplanar reach
+//              of T for all of them, and all of T's bits are uncertain when p lies within
+//              2 max(tie, coplanar epsilon) * scale of T or the LUT's margin in world units
+//              (tolerance / 2 * the light's smallest semi-axis) is not above that reach: there the
+//              oracle's coplanar rule or its t-near-0/1 rounding could decide differently;
+//          elsewhere a certain bit is the geometric truth by a margin far above the oracle's
+//          rounding, hence the oracle's verdict (its near-edge "ties" still count as blocked or not
+//          exactly as the oracle says: a tie only flags closeness).
+//   Brute: every sample decided by the oracle's per-triangle verdict (ground truth, slow).
+// Degenerate casters (detail::degenerateTriangle, the oracle's and the GPU's one rule) cast nothing.
+//
+// Bad input (penumbra::Error): a LUT not built for these sets (N, K), Exact with a LUT that is not
+// certified, receiver sets out of range, non-finite positions, indices out of range.
+#ifndef PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
+#define PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
+
+#include "penumbra/detail/geometry.hpp"
+#include "penumbra/error.hpp"
+#include "penumbra/light_lut.hpp"
+#include "penumbra/light_samples.hpp"
+#include "penumbra/reference/visibility.hpp"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace penumbra {
+
+enum class SoftMode : uint32_t {
+    Exact = 0,  ///< certified LUT + the oracle's verdict on uncertain bits: equals the oracle
+    Lut = 1,    ///< the seed's LUT approximation (centre sampling)
+    Brute = 2,  ///< every light sample tested (ground truth)
+};
+
+inline const char* softModeName(SoftMode mode) {
+    return mode == SoftMode::Exact ? "exact" : mode == SoftMode::Lut ? "lut" : mode == SoftMode::Brute ? "brute" : "?";
+}
+
+/// Value-initialised = defaults.
+struct SampleBasedSoftOptions {
+    SoftMode mode = SoftMode::Exact;
+    /// The oracle's tie and coplanar tolerances (rules 2 and 3 of reference/visibility.hpp): Exact
+    /// and Brute decide uncertain pairs with exactly these. threads is ignored.
+    reference::VisibilityOptions oracle{};
+};
+
+/// Casters: indexed triangles (float positions, as the GPU sees them).
+struct SoftCasters {
+    const glm::vec3* positions = nullptr;
+    size_t vertex_count = 0;
+    const uint32_t* indices = nullptr;  ///< 3 per triangle
+    size_t triangle_count = 0;
+};
+
+/// Receivers (view samples): float positions and, optionally, the light-sample set of each
+/// (lightSampleSet(x, y, frame, K) per pixel); null = set 0 for all.
+struct SoftReceivers {
+    const glm::vec3* positions = nullptr;
+    size_t count = 0;
+    const uint32_t* sets = nullptr;
+};
+
+struct SampleBasedSoftCpuResult {
+    uint32_t words_per_receiver = 0;  ///< ceil(N / 32)
+    std::vector<uint32_t> masks;      ///< receivers * words_per_receiver: blocked light samples
+    // Device-independent work counters.
+    uint64_t pairs = 0;             ///< (receiver, caster) pairs evaluated
+    uint64_t pairs_ignored = 0;     ///< caster ignored for the receiver (coplanar rule for all samples)
+    uint64_t pairs_unproven = 0;    ///< Exact: every bit of the pair decided by the oracle's verdict
+    uint64_t planes = 0;            ///< plane lookups (per table)
+    uint64_t planes_unproven = 0;   ///< Exact: planes whose rounding bound exceeded the tolerance
+    uint64_t bits = 0;              ///< pair bits evaluated (pairs x N)
+    uint64_t uncertain_bits = 0;    ///< Exact: pair bits the LUT could not vouch for
+    uint64_t exact_tests = 0;       ///< per-sample oracle verdicts computed
+
+    bool blocked(size_t r, uint32_t s) const { return (masks[r * words_per_receiver + s / 32] >> (s % 32)) & 1u; }
+    uint32_t blockedCount(size_t r) const {
+        uint32_t c = 0;
+        for (uint32_t w = 0; w < words_per_receiver; ++w)
+            c += detail::oracle::popcount32(masks[r * words_per_receiver + w]);
+        return c;
+    }
+};
+
+namespace detail::soft {
+
+inline constexpr double kEpsilon = 0x1.0p-53;
+
+/// A local plane and whether its rounding bound allows certain answers.
+struct LocalPlane {
+    glm::dvec4 plane{0.0};
+    bool proven = false;
+};
+
+inline double maxAbs3(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
+
+/// The plane through `origin` spanned by a and b (world), oriented by `flip`, in the light's
+/// normalised space, with its rounding bound checked against `budget` (normalised units):
+///   |dn| <= 8 eps |a| |b| (differences and the cross product rounded, products of floats exact),
+///   world signed-distance error at a light point x <= (|dn| + 4 eps |n|) (|x| + |origin|) / |n|,
+///   normalised by the smallest semi-axis, plus 16 eps for planeToLocal.
+inline LocalPlane localPlane(const LightFrame& frame, const glm::dvec3& origin, const glm::dvec3& a, const glm::dvec3& b,
+                             bool flip, double reach, double min_scale, double budget) {
+    LocalPlane out;
+    glm::dvec3 n = oracle::cross3(a, b);
+    const double length = oracle::length3(n);
+    if (!(length > 0.0) || !std::isfinite(length)) return out;
+    if (flip) n = -n;
+    const double w = -oracle::dot3(n, origin);
+    const double dn = 8.0 * kEpsilon * oracle::length3(a) * oracle::length3(b);
+    const double error = (dn + 4.0 * kEpsilon * length) * (reach + oracle::length3(origin)) / length / min_scale + 16.0 * kEpsilon;
+    out.plane = frame.planeToLocal(glm::dvec4(n, w));
+    out.proven = error <= budget;
+    return out;
+}
+
+}  // namespace detail::soft
+
+/// CPU twin of the sample-based soft-shadow pipeline's per-sample work (see the header comment).
+/// `lut` / `lut_words` may be null for Brute. Throws penumbra::Error for bad input.
+inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, const LightLutSetup* lut,
+                                                   const uint32_t* lut_words, const SoftCasters& casters,
+                                                   const SoftReceivers& receivers,
+                                                   const SampleBasedSoftOptions& options = {}) {
+    namespace oracle = detail::oracle;
+    namespace soft = detail::soft;
+    const uint32_t n = sets.count(), k = sets.sets();
+    const SoftMode mode = options.mode;
+    PENUMBRA_CHECK(mode == SoftMode::Exact || mode == SoftMode::Lut || mode == SoftMode::Brute,
+                   "sampleBasedSoftCpu: unknown mode ", static_cast<uint32_t>(mode));
+    if (mode != SoftMode::Brute) {
+        PENUMBRA_CHECK(lut != nullptr && lut_words != nullptr, "sampleBasedSoftCpu: mode ", softModeName(mode),
+                       " needs a LUT");
+        PENUMBRA_CHECK(lut->params.samples_per_set == n && lut->params.sets == k, "sampleBasedSoftCpu: the LUT was built for ",
+                       lut->params.sets, " sets of ", lut->params.samples_per_set, " samples, the light has ", k, " of ", n);
+        PENUMBRA_CHECK(mode != SoftMode::Exact || lut->options.certified,
+                       "sampleBasedSoftCpu: mode exact needs a certified LUT (LightLutOptions::certified)");
+    }
+    PENUMBRA_CHECK(casters.triangle_count == 0 || (casters.positions && casters.indices),
+                   "sampleBasedSoftCpu: casters need positions and indices");
+    PENUMBRA_CHECK(receivers.count == 0 || receivers.positions, "sampleBasedSoftCpu: receivers need positions");
+    for (size_t i = 0; i < casters.triangle_count * 3; ++i)
+        PENUMBRA_CHECK(casters.indices[i] < casters.vertex_count, "sampleBasedSoftCpu: index ", i, " is ",
+                       casters.indices[i], ", beyond the ", casters.vertex_count, " caster vertices");
+    auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    for (size_t i = 0; i < casters.vertex_count; ++i)
+        PENUMBRA_CHECK(finite(casters.positions[i]), "sampleBasedSoftCpu: caster vertex ", i, " is not finite");
+    for (size_t r = 0; r < receivers.count; ++r) {
+        PENUMBRA_CHECK(finite(receivers.positions[r]), "sampleBasedSoftCpu: receiver ", r, " is not finite");
+        PENUMBRA_CHECK(!receivers.sets || receivers.sets[r] < k, "sampleBasedSoftCpu: receiver ", r, " uses set ",
+                       receivers.sets ? receivers.sets[r] : 0u, " of ", k);
+    }
+
+    SampleBasedSoftCpuResult result;
+    result.words_per_receiver = (n + 31) / 32;
+    const uint32_t words = result.words_per_receiver;
+    result.masks.assign(receivers.count * words, 0u);
+    const LightFrame& frame = sets.frame;
+    const double min_scale = std::min(frame.scale.x, std::min(frame.scale.y, frame.scale.z));
+    const double max_scale = std::max(frame.scale.x, std::max(frame.scale.y, frame.scale.z));
+    const double tolerance = lut ? lut->options.tolerance : 0.0;
+    const double budget = 0.5 * tolerance;
+    const double margin_world = budget * min_scale;
+    const double eps = std::max(options.oracle.tie_epsilon, options.oracle.coplanar_epsilon);
+    const uint32_t tables = lut ? lut->params.tables_per_set : 0;
+
+    for (size_t r = 0; r < receivers.count; ++r) {
+        const glm::dvec3 p(receivers.positions[r]);
+        const uint32_t set = receivers.sets ? receivers.sets[r] : 0u;
+        const glm::dvec3* world = sets.worldSet(set);
+        uint32_t* out = result.masks.data() + r * words;
+        // Bounds of the oracle's per-sample scale term |s - p|_inf over the light.
+        const double centre_reach = soft::maxAbs3(frame.center - p);
+        const double light_reach = max_scale * std::sqrt(3.0);
+        const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
+        const double light_far = oracle::length3(frame.center) + light_reach;  // |x| over the light
+
+        for (size_t t = 0; t < casters.triangle_count; ++t) {
+            const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
+            const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
+            const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
+            if (detail::degenerateTriangle(v0, v1, v2)) continue;
+            ++result.pairs;
+            result.bits += n;
+            oracle::Triangle tri{v0, v1, v2, static_cast<uint32_t>(t)};
+            auto decide = [&](uint32_t s) {  // the oracle's verdict for one pair
+                ++result.exact_tests;
+                const oracle::Verdict v = oracle::classifySegment(tri, oracle::makeSegmentQuery(p, world[s], options.oracle));
+                return v.hit;
+            };
+            if (mode == SoftMode::Brute) {
+                for (uint32_t s = 0; s < n; ++s)
+                    if (decide(s)) out[s / 32] |= 1u << (s % 32);
+                continue;
+            }
+            // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
+            const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
+            const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
+            bool unproven = false;
+            {
+                const double distance2 = detail::pointTriangleDistance2<double>(p, v0, v1, v2);
+                const double ignore = options.oracle.coplanar_epsilon * scale_lo;
+                if (distance2 < ignore * ignore * (1.0 - 1e-9)) {  // the oracle ignores T for every sample
+                    ++result.pairs_ignored;
+                    continue;
+                }
+                const double reach = 2.0 * eps * scale_hi;
+                unproven = mode == SoftMode::Exact && (distance2 <= reach * reach * (1.0 + 1e-9) || !(margin_world > reach));
+            }
+            // Orientation of the shadow cone: the opposite vertex behind each edge plane; p in front
+            // of T's plane. det = (v0 - p) . ((v1 - p) x (v2 - p)) decides both: cross(a, b) . c,
+            // cross(b, c) . a, cross(c, a) . b all equal det, and T's normal (v1 - v0) x (v2 - v0)
+            // gives p the side -det.
+            const glm::dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
+            const double det = oracle::dot3(a, oracle::cross3(b, c));
+            const double det_bound = 16.0 * soft::kEpsilon * oracle::length3(a) * oracle::length3(b) * oracle::length3(c);
+            if (mode == SoftMode::Exact && !(std::fabs(det) > det_bound)) unproven = true;
+            const bool positive = det > 0.0;
+            // Edge planes through p: edge (v0 v1) opposite v2 is spanned by a, b, etc. With det > 0
+            // the opposite vertex lies on the positive side of cross(a, b): flip so it is behind.
+            const double reach_world = light_far;
+            soft::LocalPlane planes[4] = {
+                soft::localPlane(frame, p, a, b, positive, reach_world, min_scale, budget),
+                soft::localPlane(frame, p, b, c, positive, reach_world, min_scale, budget),
+                soft::localPlane(frame, p, c, a, positive, reach_world, min_scale, budget),
+                // T's plane through v0, oriented with p in front: samples beyond T are behind it.
+                soft::localPlane(frame, v0, v1 - v0, v2 - v0, positive, reach_world, min_scale, budget),
+            };
+            if (mode == SoftMode::Exact && unproven) {
+                ++result.pairs_unproven;
+                result.uncertain_bits += n;
+                for (uint32_t s = 0; s < n; ++s)
+                    if (decide(s)) out[s / 32] |= 1u << (s % 32);
+                continue;
+            }
+            for (uint32_t block = 0; block < tables; ++block) {
+                const uint32_t table = set * tables + block;
+                result.planes += 4;
+                if (mode == SoftMode::Lut) {
+                    LutMask m{~0u, ~0u, ~0u, ~0u};
+                    for (const soft::LocalPlane& plane : planes) {
+                        const LutMask behind = lightLutLookup(lut->params, lut_words, table, plane.plane).centre;
+                        for (int w = 0; w < 4; ++w) m[w] &= behind[w];
+                    }
+                    for (int w = 0; w < 4 && block * 4 + w < words; ++w) out[block * 4 + w] |= m[w];
+                    continue;
+                }
+                LutCertain combined;
+                for (int i = 0; i < 4; ++i) {
+                    LutCertain c_i;
+                    if (planes[i].proven) {
+                        c_i = lutCertain(lightLutLookup(lut->params, lut_words, table, planes[i].plane));
+                    } else {
+                        ++result.planes_unproven;
+                        c_i.uncertain = lightLutValidMask(lut->params, table);
+                    }
+                    combined = i == 0 ? c_i : lutCombine(combined, c_i);
+                }
+                const LutMask valid = lightLutValidMask(lut->params, table);
+                for (int w = 0; w < 4 && block * 4 + w < words; ++w) {
+                    uint32_t m = combined.behind[w];
+                    uint32_t uncertain = combined.uncertain[w] & valid[w];
+                    result.uncertain_bits += oracle::popcount32(uncertain);
+                    while (uncertain) {
+                        const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(uncertain));
+                        uncertain &= uncertain - 1u;
+                        if (decide(block * 128u + 32u * w + bit)) m |= 1u << bit;
+                    }
+                    out[block * 4 + w] |= m;
+                }
+            }
+        }
+    }
+    return result;
+}
+
+}  // namespace penumbra
+
+#endif
