@@ -59,6 +59,7 @@
 #include "penumbra/light_lut.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -370,40 +371,23 @@ private:
         glBindBuffersRange(target, index, 1, &buffer, &o, &s);
     }
 
+    std::array<gl::BlockBinding, 5> storageBlocks() const {
+        return {{{"samples", "PenumbraLutSamplesBlock", bindings_.samples},
+                 {"normal_cells", "PenumbraLutNormalCellsBlock", bindings_.normal_cells},
+                 {"distance_cells", "PenumbraLutDistanceCellsBlock", bindings_.distance_cells},
+                 {"table", "PenumbraLutCentreBlock", bindings_.table},
+                 {"uncertain", "PenumbraLutUncertainBlock", bindings_.uncertain}}};
+    }
+
     void checkBindings() const {
-        const GLint max_ssbo = gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
-        const GLint max_ubo = gl::getInteger(GL_MAX_UNIFORM_BUFFER_BINDINGS);
-        const uint32_t ssbo[] = {bindings_.samples, bindings_.normal_cells, bindings_.distance_cells, bindings_.table,
-                                 bindings_.uncertain};
-        const char* const names[] = {"samples", "normal_cells", "distance_cells", "table", "uncertain"};
-        for (int i = 0; i < 5; ++i) {
-            PENUMBRA_CHECK(ssbo[i] < static_cast<uint32_t>(max_ssbo), "penumbra: LightLutBindings::", names[i], " ",
-                           ssbo[i], " is not below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS ", max_ssbo);
-            for (int j = 0; j < i; ++j) {
-                PENUMBRA_CHECK(ssbo[i] != ssbo[j], "penumbra: LightLutBindings::", names[i], " and ", names[j],
-                               " are both ", ssbo[i], " (the shader-storage bindings must differ)");
-            }
-        }
-        PENUMBRA_CHECK(bindings_.params < static_cast<uint32_t>(max_ubo), "penumbra: LightLutBindings::params ",
-                       bindings_.params, " is not below GL_MAX_UNIFORM_BUFFER_BINDINGS ", max_ubo);
+        const auto storage = storageBlocks();
+        gl::checkBlockBindings("LightLutBindings", storage.data(), int(storage.size()), "params", bindings_.params);
     }
 
     // Re-points the program's blocks at bindings_ (program state, set once at construction).
     void pointBlocks(GLuint program) const {
-        const struct {
-            const char* block;
-            uint32_t binding;
-        } storage[] = {{"PenumbraLutSamplesBlock", bindings_.samples},
-                       {"PenumbraLutNormalCellsBlock", bindings_.normal_cells},
-                       {"PenumbraLutDistanceCellsBlock", bindings_.distance_cells},
-                       {"PenumbraLutCentreBlock", bindings_.table},
-                       {"PenumbraLutUncertainBlock", bindings_.uncertain}};
-        for (const auto& s : storage) {
-            const GLuint index = glGetProgramResourceIndex(program, GL_SHADER_STORAGE_BLOCK, s.block);
-            if (index != GL_INVALID_INDEX) glShaderStorageBlockBinding(program, index, s.binding);
-        }
-        const GLuint block = glGetUniformBlockIndex(program, "PenumbraLutParamsBlock");
-        if (block != GL_INVALID_INDEX) glUniformBlockBinding(program, block, bindings_.params);
+        const auto storage = storageBlocks();
+        gl::pointBlocks(program, storage.data(), int(storage.size()), "PenumbraLutParamsBlock", bindings_.params);
     }
 };
 

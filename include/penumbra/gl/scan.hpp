@@ -61,6 +61,7 @@
 #include "penumbra/gl/validate.hpp"
 #include "penumbra/scan.hpp"
 
+#include <array>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -414,40 +415,23 @@ private:
         glBindBuffersRange(target, index, 1, &buffer, &offset, &size);
     }
 
+    std::array<gl::BlockBinding, 5> storageBlocks() const {
+        return {{{"input", "PenumbraScanInput", bindings_.input},
+                 {"output", "PenumbraScanOutput", bindings_.output},
+                 {"partials", "PenumbraScanPartials", bindings_.partials},
+                 {"input_vec4", "PenumbraScanInputQuads", bindings_.input_vec4},
+                 {"output_vec4", "PenumbraScanOutputQuads", bindings_.output_vec4}}};
+    }
+
     void checkBindings() const {
-        const GLint max_ssbo = gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
-        const GLint max_ubo = gl::getInteger(GL_MAX_UNIFORM_BUFFER_BINDINGS);
-        const uint32_t ssbo[] = {bindings_.input, bindings_.output, bindings_.partials, bindings_.input_vec4,
-                                 bindings_.output_vec4};
-        const char* const names[] = {"input", "output", "partials", "input_vec4", "output_vec4"};
-        for (int i = 0; i < 5; ++i) {
-            PENUMBRA_CHECK(ssbo[i] < static_cast<uint32_t>(max_ssbo), "penumbra: ScanBindings::", names[i], " ",
-                           ssbo[i], " is not below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS ", max_ssbo);
-            for (int j = 0; j < i; ++j) {
-                PENUMBRA_CHECK(ssbo[i] != ssbo[j], "penumbra: ScanBindings::", names[i], " and ", names[j],
-                               " are both ", ssbo[i], " (the shader-storage bindings must differ)");
-            }
-        }
-        PENUMBRA_CHECK(bindings_.constants < static_cast<uint32_t>(max_ubo), "penumbra: ScanBindings::constants ",
-                       bindings_.constants, " is not below GL_MAX_UNIFORM_BUFFER_BINDINGS ", max_ubo);
+        const auto storage = storageBlocks();
+        gl::checkBlockBindings("ScanBindings", storage.data(), int(storage.size()), "constants", bindings_.constants);
     }
 
     // Re-points a program's blocks at bindings_ (program state, set once at construction).
     void pointBlocks(GLuint program) const {
-        const struct {
-            const char* block;
-            uint32_t binding;
-        } storage[] = {{"PenumbraScanInput", bindings_.input},
-                       {"PenumbraScanOutput", bindings_.output},
-                       {"PenumbraScanPartials", bindings_.partials},
-                       {"PenumbraScanInputQuads", bindings_.input_vec4},
-                       {"PenumbraScanOutputQuads", bindings_.output_vec4}};
-        for (const auto& s : storage) {
-            const GLuint index = glGetProgramResourceIndex(program, GL_SHADER_STORAGE_BLOCK, s.block);
-            if (index != GL_INVALID_INDEX) glShaderStorageBlockBinding(program, index, s.binding);
-        }
-        const GLuint block = glGetUniformBlockIndex(program, "PenumbraScanConstantsBlock");
-        if (block != GL_INVALID_INDEX) glUniformBlockBinding(program, block, bindings_.constants);
+        const auto storage = storageBlocks();
+        gl::pointBlocks(program, storage.data(), int(storage.size()), "PenumbraScanConstantsBlock", bindings_.constants);
     }
 
     void buildKernel(int pass, int vec4, const char* key, const ShaderLibrary& library) {

@@ -5,6 +5,7 @@
 #define PENUMBRA_GL_VALIDATE_HPP
 
 #include "penumbra/buffer_range.hpp"
+#include "penumbra/error.hpp"
 #include "penumbra/gl/gl.hpp"
 
 #include <cstdint>
@@ -46,6 +47,46 @@ inline void bindRange(GLenum target, GLuint index, const BufferRange& range) {
     if (range.size == 0) return;
     glBindBufferRange(target, index, range.buffer, static_cast<GLintptr>(range.offset),
                       static_cast<GLsizeiptr>(range.size));
+}
+
+/// One shader-storage block of an executor's program and the binding its Bindings struct gives it.
+struct BlockBinding {
+    const char* name;     ///< the Bindings struct's member (for messages)
+    const char* block;    ///< the GLSL block name
+    uint32_t binding;
+};
+
+/// Load time: every storage binding is below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS and differs from
+/// the others, the uniform binding is below GL_MAX_UNIFORM_BUFFER_BINDINGS; throws penumbra::Error
+/// naming `bindings_struct`'s member.
+inline void checkBlockBindings(const char* bindings_struct, const BlockBinding* storage, int count,
+                               const char* uniform_name, uint32_t uniform_binding) {
+    const GLint max_ssbo = getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
+    const GLint max_ubo = getInteger(GL_MAX_UNIFORM_BUFFER_BINDINGS);
+    for (int i = 0; i < count; ++i) {
+        PENUMBRA_CHECK(storage[i].binding < static_cast<uint32_t>(max_ssbo), "penumbra: ", bindings_struct, "::",
+                       storage[i].name, " ", storage[i].binding, " is not below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS ",
+                       max_ssbo);
+        for (int j = 0; j < i; ++j) {
+            PENUMBRA_CHECK(storage[i].binding != storage[j].binding, "penumbra: ", bindings_struct, "::", storage[i].name,
+                           " and ", storage[j].name, " are both ", storage[i].binding,
+                           " (the shader-storage bindings must differ)");
+        }
+    }
+    PENUMBRA_CHECK(uniform_binding < static_cast<uint32_t>(max_ubo), "penumbra: ", bindings_struct, "::", uniform_name, " ",
+                   uniform_binding, " is not below GL_MAX_UNIFORM_BUFFER_BINDINGS ", max_ubo);
+}
+
+/// Load time: re-points `program`'s storage blocks and its uniform block `uniform_block` at the
+/// given bindings (program state, set once; blocks the program lacks are skipped).
+inline void pointBlocks(GLuint program, const BlockBinding* storage, int count, const char* uniform_block,
+                        uint32_t uniform_binding) {
+    for (int i = 0; i < count; ++i) {
+        const GLuint index = glGetProgramResourceIndex(program, GL_SHADER_STORAGE_BLOCK, storage[i].block);
+        if (index != GL_INVALID_INDEX) glShaderStorageBlockBinding(program, index, storage[i].binding);
+    }
+    const GLuint block = glGetUniformBlockIndex(program, uniform_block);
+    if (block != GL_INVALID_INDEX) glUniformBlockBinding(program, block, uniform_binding);
 }
 
 }  // namespace penumbra::gl
