@@ -9,6 +9,7 @@
 #include <penumbra/light_samples.hpp>
 #include <penumbra/reference/light_samples.hpp>
 
+#include "support/splitmix.hpp"
 #include "support/test_support.hpp"
 
 #include <doctest/doctest.h>
@@ -49,20 +50,7 @@ const char* shapeName(LightShape s) {
     }
 }
 
-/// splitmix64: the same stream on every platform, unlike std:: distributions.
-struct Rng {
-    uint64_t state;
-    explicit Rng(uint64_t seed) : state(seed) {}
-    uint64_t next() {
-        uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-        return z ^ (z >> 31);
-    }
-    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-    double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-    dvec3 point(double lo, double hi) { return {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)}; }
-};
+using Rng = penumbra::test::SplitMix64;
 
 uint64_t hashSamples(const dvec3* samples, size_t n) {
     uint64_t h = 1469598103934665603ull;  // FNV-1a over the raw bits

@@ -9,6 +9,7 @@
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
 
+#include "support/splitmix.hpp"
 #include "support/test_support.hpp"
 
 #include <doctest/doctest.h>
@@ -47,21 +48,7 @@ bool stressRequested() {
     return env && std::strcmp(env, "1") == 0;
 }
 
-/// splitmix64: the same stream on every platform, unlike std:: distributions.
-struct Rng {
-    uint64_t state;
-    explicit Rng(uint64_t seed) : state(seed) {}
-    uint64_t next() {
-        uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-        return z ^ (z >> 31);
-    }
-    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-    double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-    uint32_t below(uint32_t n) { return static_cast<uint32_t>(next() % n); }
-    dvec3 point(double lo, double hi) { return {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)}; }
-};
+using Rng = penumbra::test::SplitMix64;
 
 struct Mesh {
     std::vector<dvec3> positions;
