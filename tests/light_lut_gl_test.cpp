@@ -78,19 +78,8 @@ penumbra::LightLutOptions lutOptions(uint32_t resolution, bool certified,
     return o;
 }
 
-// "" when equal, else the first differing word (as texel, word, table half) and the count.
 std::string firstMismatch(const std::vector<uint32_t>& got, const std::vector<uint32_t>& want) {
-    if (got.size() != want.size()) return "size " + std::to_string(got.size()) + " != " + std::to_string(want.size());
-    for (size_t i = 0; i < got.size(); ++i) {
-        if (got[i] != want[i]) {
-            size_t wrong = 0;
-            for (size_t j = i; j < got.size(); ++j) wrong += got[j] != want[j];
-            return "word " + std::to_string(i) + " (texel " + std::to_string(i / 4) + "): got " +
-                   std::to_string(got[i]) + ", want " + std::to_string(want[i]) + " (" + std::to_string(wrong) +
-                   " words wrong)";
-        }
-    }
-    return {};
+    return penumbra::test::firstMismatch(got, want, 4, "texel");
 }
 
 /// Generates on the GPU into a poisoned buffer at a nonzero aligned offset with guard words

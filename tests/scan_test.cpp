@@ -45,6 +45,7 @@ int g_scan_test_asserts = 0;
 #include <string>
 #include <vector>
 
+using penumbra::test::firstMismatch;
 using penumbra::test::contains;
 using penumbra::test::context;
 using penumbra::test::errorOf;
@@ -64,19 +65,6 @@ std::vector<uint32_t> cpuScan(const std::vector<uint32_t>& in, penumbra::ScanKin
     return out;
 }
 
-// "" when equal, else the first differing index and values.
-std::string firstMismatch(const std::vector<uint32_t>& got, const std::vector<uint32_t>& want) {
-    if (got.size() != want.size()) return "size " + std::to_string(got.size()) + " != " + std::to_string(want.size());
-    for (size_t i = 0; i < got.size(); ++i) {
-        if (got[i] != want[i]) {
-            size_t wrong = 0;
-            for (size_t j = i; j < got.size(); ++j) wrong += got[j] != want[j];
-            return "element " + std::to_string(i) + ": got " + std::to_string(got[i]) + ", want " +
-                   std::to_string(want[i]) + " (" + std::to_string(wrong) + " wrong)";
-        }
-    }
-    return {};
-}
 
 }  // namespace
 

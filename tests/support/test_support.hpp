@@ -17,6 +17,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace penumbra::test {
 
@@ -46,6 +47,23 @@ std::string errorOf(F&& f) {
 }
 
 inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// "" when equal, else the first differing word (index and values) and how many differ from there
+/// on; `per_item` > 1 also names the item (e.g. 4 words per uvec4 texel).
+inline std::string firstMismatch(const std::vector<uint32_t>& got, const std::vector<uint32_t>& want,
+                                 size_t per_item = 1, const char* item = "element") {
+    if (got.size() != want.size()) return "size " + std::to_string(got.size()) + " != " + std::to_string(want.size());
+    for (size_t i = 0; i < got.size(); ++i) {
+        if (got[i] == want[i]) continue;
+        size_t wrong = 0;
+        for (size_t j = i; j < got.size(); ++j) wrong += got[j] != want[j];
+        std::string where = "word " + std::to_string(i);
+        if (per_item > 1) where += " (" + std::string(item) + " " + std::to_string(i / per_item) + ")";
+        return where + ": got " + std::to_string(got[i]) + ", want " + std::to_string(want[i]) + " (" +
+               std::to_string(wrong) + " wrong)";
+    }
+    return "";
+}
 
 }  // namespace penumbra::test
 
