@@ -221,7 +221,39 @@ inline float roundUpToFloat(double x) {
     return f;
 }
 
-inline double det3(const glm::dmat3& m) { return glm::determinant(m); }
+// Double helpers of the setup with every product opaque: the setup gives the same bits whatever
+// the compiler's contraction flags (tests/twin_digest.cpp), so GPU == twin holds for any build.
+inline glm::dvec3 influenceMul(const glm::dmat3& m, const glm::dvec3& v) {  // m * v
+    glm::dvec3 r;
+    for (int i = 0; i < 3; ++i) r[i] = (mulRounded(m[0][i], v.x) + mulRounded(m[1][i], v.y)) + mulRounded(m[2][i], v.z);
+    return r;
+}
+inline glm::dmat4 influenceMul(const glm::dmat4& a, const glm::dmat4& b) {  // a * b
+    glm::dmat4 r;
+    for (int c = 0; c < 4; ++c)
+        for (int i = 0; i < 4; ++i)
+            r[c][i] = ((mulRounded(a[0][i], b[c][0]) + mulRounded(a[1][i], b[c][1])) + mulRounded(a[2][i], b[c][2])) +
+                      mulRounded(a[3][i], b[c][3]);
+    return r;
+}
+inline double det3(const glm::dmat3& m) {
+    const double c0 = mulRounded(m[1][1], m[2][2]) - mulRounded(m[2][1], m[1][2]);
+    const double c1 = mulRounded(m[2][1], m[0][2]) - mulRounded(m[0][1], m[2][2]);
+    const double c2 = mulRounded(m[0][1], m[1][2]) - mulRounded(m[1][1], m[0][2]);
+    return (mulRounded(m[0][0], c0) + mulRounded(m[1][0], c1)) + mulRounded(m[2][0], c2);
+}
+inline glm::dmat3 influenceInverse(const glm::dmat3& m) {  // adjugate / determinant
+    const double d = det3(m);
+    glm::dmat3 r;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            // r[j][i] = cofactor of m[i][j] / d (column-major: r = adj(m) / det)
+            const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            r[j][i] = (mulRounded(m[i1][j1], m[i2][j2]) - mulRounded(m[i2][j1], m[i1][j2])) / d;
+        }
+    }
+    return r;
+}
 
 }  // namespace detail
 
@@ -268,7 +300,8 @@ inline InfluenceRegionSetup influenceRegionSetup(const Light& light, const glm::
                                 detail::opaque(static_cast<float>(true_frame.center.y)),
                                 detail::opaque(static_cast<float>(true_frame.center.z)));
     const double smallest_axis = std::min(true_frame.scale.x, std::min(true_frame.scale.y, true_frame.scale.z));
-    const double centre_shift = glm::length(true_frame.center - s.frame.center) / smallest_axis;
+    const glm::dvec3 shift = true_frame.center - s.frame.center;
+    const double centre_shift = std::sqrt(detail::dotRounded(shift, shift)) / smallest_axis;
     PENUMBRA_CHECK(std::isfinite(s.frame.center.x) && std::isfinite(s.frame.center.y) && std::isfinite(s.frame.center.z) &&
                    centre_shift < 0.25, "penumbra: influenceRegionSetup: light.center (", light.center.x, ", ", light.center.y,
                    ", ", light.center.z, ") is too far from the origin for a light of this size in float (rounding moves it ",
@@ -285,14 +318,14 @@ inline InfluenceRegionSetup influenceRegionSetup(const Light& light, const glm::
         rhs[i] = -vp[3][rows[i]];
     }
     double scale3 = 0.0;
-    for (int j = 0; j < 3; ++j) scale3 = std::max(scale3, glm::length(m3[j]));
+    for (int j = 0; j < 3; ++j) scale3 = std::max(scale3, std::sqrt(detail::dotRounded(m3[j], m3[j])));
     const double det = detail::det3(m3);
     PENUMBRA_CHECK(std::isfinite(det) && std::abs(det) > 1e-12 * scale3 * scale3 * scale3,
                    "penumbra: influenceRegionSetup: view_projection is not a perspective projection from a point "
                    "(rows x, y, w are singular, determinant ", det, ")");
-    const glm::dvec3 eye = glm::inverse(m3) * rhs;
+    const glm::dvec3 eye = detail::influenceMul(detail::influenceInverse(m3), rhs);
     s.projection_center_local = frame.toLocal(eye);
-    const double eye_local = glm::length(s.projection_center_local);
+    const double eye_local = std::sqrt(detail::dotRounded(s.projection_center_local, s.projection_center_local));
     PENUMBRA_CHECK(eye_local <= 1.0, "penumbra: influenceRegionSetup: the light grid's projection centre (", eye.x, ", ",
                    eye.y, ", ", eye.z, ") lies outside the light (", eye_local,
                    " light radii from its centre): project the grid from inside the light (its centre)");
@@ -306,8 +339,8 @@ inline InfluenceRegionSetup influenceRegionSetup(const Light& light, const glm::
     const glm::dvec3 row_w(vp[0][3], vp[1][3], vp[2][3]);
     glm::dmat3 rs = frame.rotation;  // R S: columns scaled
     for (int j = 0; j < 3; ++j) rs[j] *= frame.scale[j];
-    const glm::dvec3 view_local = glm::transpose(rs) * row_w;
-    PENUMBRA_CHECK(glm::dot(view_local, glm::dvec3(far_local)) > 0.0, "penumbra: influenceRegionSetup: far_plane = (",
+    const glm::dvec3 view_local = detail::influenceMul(glm::transpose(rs), row_w);
+    PENUMBRA_CHECK(detail::dotRounded(view_local, glm::dvec3(far_local)) > 0.0, "penumbra: influenceRegionSetup: far_plane = (",
                    fp.x, ", ", fp.y, ", ", fp.z, ", ", fp.w,
                    ") is behind the light: it must face the light grid's view direction");
     s.far_plane_local = far_local;
@@ -316,7 +349,7 @@ inline InfluenceRegionSetup influenceRegionSetup(const Light& light, const glm::
     glm::dmat4 to_world(1.0);
     for (int j = 0; j < 3; ++j) to_world[j] = glm::dvec4(rs[j], 0.0);
     to_world[3] = glm::dvec4(frame.center, 1.0);
-    s.local_to_clip = vp * to_world;
+    s.local_to_clip = detail::influenceMul(vp, to_world);
     const double W = o.grid_width, H = o.grid_height;
     glm::dvec4 pixel_rows[3];
     for (int j = 0; j < 4; ++j) {
@@ -328,7 +361,7 @@ inline InfluenceRegionSetup influenceRegionSetup(const Light& light, const glm::
     glm::dmat3 linear;  // linear[col][row]
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) linear[c][r] = pixel_rows[r][c];
-    const glm::dmat3 cut = glm::transpose(glm::inverse(linear));  // maps a local normal to a pixel line
+    const glm::dmat3 cut = glm::transpose(detail::influenceInverse(linear));  // maps a local normal to a pixel line
 
     // The world -> local rows: S^-1 R^T.
     glm::dmat3 to_local_m = glm::transpose(frame.rotation);  // rows = R columns
