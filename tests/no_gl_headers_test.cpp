@@ -3,6 +3,7 @@
 // GL loader on its include path, and a GL header slipping in is an #error. (The conservative
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
 #include <penumbra/buffer_range.hpp>
+#include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
@@ -58,6 +59,17 @@ TEST_CASE("cpu: the GL-free headers plan, validate and run their CPU twins witho
     const penumbra::LightSampleSets light_sets = penumbra::makeLightSampleSets(penumbra::Light{});
     CHECK(light_sets.world.size() == light_sets.local.size());
     CHECK(penumbra::lightSampleSet(1, 2, 3, light_sets.sets()) < light_sets.sets());
+    // Influence regions: setup and the CPU twin of a small caster under a sphere light.
+    penumbra::Light sphere;
+    sphere.center = glm::dvec3(0, 5, 0);
+    sphere.size = glm::dvec3(0.5);
+    penumbra::InfluenceRegionOptions influence;
+    influence.grid_width = influence.grid_height = 8;
+    influence.far_plane = penumbra::influenceFarPlaneAtDepth(light.view_projection, 6.0);
+    const penumbra::InfluenceRegionSetup influence_setup = penumbra::influenceRegionSetup(sphere, light.view_projection, influence);
+    const penumbra::InfluenceRegion region = penumbra::influenceRegion(vertices[0], vertices[1], vertices[2], influence_setup);
+    CHECK(region.kind == penumbra::InfluenceRegionKind::Hull);
+    CHECK(penumbra::influenceRegionCoversTexel(region, 4, 4));
     // Status is plain C++ too.
     CHECK(std::string(penumbra::statusName(penumbra::Status::RangeTooSmall)) == "range too small");
 }

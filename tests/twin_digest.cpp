@@ -12,6 +12,7 @@
 //
 // Usage: twin_digest   (lines starting with "#" describe the build and are not compared)
 #include <penumbra/conservative_raster.hpp>
+#include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <type_traits>
@@ -246,6 +248,37 @@ void conservativeTwins() {
     print("conservativeRequiredPixels", required);
 }
 
+// ---- influence regions (sintorn2008 §4.1) --------------------------------------------------------
+
+void influenceRegionTwin() {
+    Digest setups, regions, texels, shadowed;
+    for (const twin_digest::InfluenceInput& in : twin_digest::makeInfluenceInputs(9, 400)) {
+        setups.add(in.setup.params);
+        for (size_t t = 0; t + 2 < in.triangles.size(); t += 3) {
+            const penumbra::InfluenceRegion r =
+                penumbra::influenceRegion(in.triangles[t], in.triangles[t + 1], in.triangles[t + 2], in.setup);
+            regions.add(static_cast<int>(r.kind));
+            regions.add(r.fallback);
+            regions.add(r.point_count);
+            for (int i = 0; i < r.point_count; ++i) regions.add(r.points[static_cast<size_t>(i)]);
+            regions.add(r.polygon_count);
+            for (int i = 0; i < r.polygon_count; ++i) regions.add(r.polygon[static_cast<size_t>(i)]);
+            regions.add(r.count);
+            for (int i = 0; i < r.count; ++i) regions.add(r.pixels[static_cast<size_t>(i)]);
+            const penumbra::HullRaster raster = penumbra::influenceRegionTexels(r, in.setup, (t / 3) % 2 ? 1e-3 : 0.0);
+            texels.add(raster.fragments);
+            texels.add(raster.uncertain);
+            const glm::dvec3 a(in.triangles[t]), b(in.triangles[t + 1]), c(in.triangles[t + 2]);
+            const glm::dvec3 p = 0.25 * (a + b + c) + glm::dvec3(0.1, -0.5 - 0.001 * double(t % 50), 0.05);
+            shadowed.add(static_cast<uint8_t>(penumbra::influenceShadowedContinuous(in.setup.frame, a, b, c, p)));
+        }
+    }
+    print("influenceRegionSetup(inputs TU)", setups);
+    print("influenceRegion", regions);
+    print("influenceRegionTexels", texels);
+    print("influenceShadowedContinuous", shadowed);
+}
+
 // ---- hard shadows: the blocker test and the whole pipeline twin --------------------------------
 
 void hardShadowTwins() {
@@ -451,6 +484,7 @@ int main() {
     scanTwin();
     sampleListTwins();
     conservativeTwins();
+    influenceRegionTwin();
     hardShadowTwins();
     oracleTwin();
     lutTwins();

@@ -223,4 +223,39 @@ std::vector<glm::dvec3> makePoints(uint64_t seed, int count, const glm::dvec3& l
     return out;
 }
 
+std::vector<InfluenceInput> makeInfluenceInputs(uint64_t seed, int triangles_per_setup) {
+    Rng rng(seed);
+    std::vector<InfluenceInput> out;
+    const int sides[4] = {4, 6, 8, 12};
+    for (int i = 0; i < 8; ++i) {
+        penumbra::Light light;
+        light.shape = i % 3 == 0 ? penumbra::LightShape::Sphere : i % 3 == 1 ? penumbra::LightShape::Ellipsoid
+                                                                              : penumbra::LightShape::Disk;
+        // Not a float on purpose (the setup moves the frame to the float centre and inflates). The
+        // sum is formed in double explicitly: GCC -O3 was seen to drop a float round trip here.
+        const glm::dvec3 jitter(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+        light.center = jitter + glm::dvec3(0.0, 6.0, 0.0);
+        light.size = glm::dvec3(rng.uniform(0.1, 0.8), rng.uniform(0.1, 0.8), rng.uniform(0.1, 0.8));
+        light.axis_z = glm::dvec3(rng.uniform(-0.3, 0.3), 1.0, rng.uniform(-0.3, 0.3));
+        const glm::vec3 lo(-4, 0, -4), hi(4, 1, 4);
+        const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(glm::vec3(light.center), 1.0f), lo, hi);
+        penumbra::InfluenceRegionOptions o;
+        o.grid_width = 96;
+        o.grid_height = 64;
+        o.sides = sides[i % 4];
+        o.cut_by_supporting_plane = i >= 4;
+        o.far_plane = i % 2 ? penumbra::influenceFarPlaneAtDepth(vp, 8.0) : glm::dvec4(0.0, 1.0, 0.0, 0.25);
+        InfluenceInput in{penumbra::influenceRegionSetup(light, vp, o), {}};
+        for (int t = 0; t < triangles_per_setup; ++t) {
+            const glm::vec3 base(rng.uniformf(-4.0f, 4.0f), rng.uniformf(0.3f, 5.5f), rng.uniformf(-4.0f, 4.0f));
+            const float size = t % 4 == 0 ? 2.0f : t % 4 == 1 ? 0.02f : 0.4f;
+            in.triangles.push_back(base);
+            in.triangles.push_back(base + size * rng.vec3(-1.0f, 1.0f));
+            in.triangles.push_back(t % 7 == 3 ? base : base + size * rng.vec3(-1.0f, 1.0f));
+        }
+        out.push_back(in);
+    }
+    return out;
+}
+
 }  // namespace twin_digest

@@ -6,6 +6,7 @@
 #define PENUMBRA_TESTS_TWIN_DIGEST_INPUTS_HPP
 
 #include <penumbra/conservative_raster.hpp>
+#include <penumbra/influence_region.hpp>
 #include <penumbra/sample_lists.hpp>
 
 #include <glm/glm.hpp>
@@ -59,6 +60,16 @@ std::vector<glm::dvec3> makeSegments(const Scene& scene, uint64_t seed, int coun
 std::vector<glm::dvec3> makeRays(uint64_t seed, int count);
 /// Receivers on the ground and samples of a light.
 std::vector<glm::dvec3> makePoints(uint64_t seed, int count, const glm::dvec3& lo, const glm::dvec3& hi);
+
+/// Influence regions: setups (k = 4, 6, 8, 12; cut on and off; sphere, ellipsoid, disk lights)
+/// built here, with contraction off (the setup's double arithmetic and the light view-projection
+/// are contractible; only this translation unit calls influenceRegionSetup, so only its code for
+/// it is linked), and world-space caster triangles for each (3 vertices per triangle).
+struct InfluenceInput {
+    penumbra::InfluenceRegionSetup setup;
+    std::vector<glm::vec3> triangles;
+};
+std::vector<InfluenceInput> makeInfluenceInputs(uint64_t seed, int triangles_per_setup);
 
 }  // namespace twin_digest
 
