@@ -2,6 +2,7 @@
 // oracle compile and run with no GL header anywhere in the translation unit — this target has no
 // GL loader on its include path, and a GL header slipping in is an #error. (The conservative
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
+#include <penumbra/bent_normals.hpp>
 #include <penumbra/buffer_range.hpp>
 #include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>

@@ -11,6 +11,7 @@
 // header still include the GL header, so this links glad for its declarations only).
 //
 // Usage: twin_digest   (lines starting with "#" describe the build and are not compared)
+#include <penumbra/bent_normals.hpp>
 #include <penumbra/conservative_raster.hpp>
 #include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
@@ -429,6 +430,27 @@ void lightSampleTwins() {
     print("lightSampleSet/RotationTurns", select_d);
 }
 
+// ---- bent normals --------------------------------------------------------------------------------
+
+void bentNormalTwins() {
+    const std::vector<glm::dvec3> points = twin_digest::makePoints(14, 600, glm::dvec3(-1.0), glm::dvec3(1.0));
+    std::vector<glm::vec3> positions(points.begin(), points.end());
+    std::vector<uint32_t> indices;
+    for (uint32_t i = 0; i + 2 < positions.size(); ++i) indices.insert(indices.end(), {i, i + 1, i + 2});
+    const penumbra::BentNormalMesh mesh =
+        penumbra::bentNormalMesh(positions.data(), positions.size(), indices.data(), indices.size());
+    Digest normals, light, shade;
+    normals.add(mesh.face_normals);
+    for (const glm::vec4 l : {glm::vec4(0.3f, 2.5f, -0.7f, 0.0f), glm::vec4(-1.5f, 0.2f, 1.1f, 0.4f)})
+        for (uint32_t v = 0; v < mesh.vertex_count; ++v) light.add(penumbra::bentLight(mesh, v, positions[v], glm::vec3(l), l.w));
+    for (size_t i = 0; i + 1 < points.size(); ++i)
+        shade.add(penumbra::bentShade(static_cast<float>(points[i].x), static_cast<float>(points[i + 1].y),
+                                      3.0f + static_cast<float>(points[i].z)));
+    print("bentNormalMesh (face normals)", normals);
+    print("bentLight", light);
+    print("bentShade", shade);
+}
+
 // ---- helpers the twins call, on identical inputs: which function changes bits ------------------
 
 void helperProbes() {
@@ -488,6 +510,7 @@ int main() {
     hardShadowTwins();
     oracleTwin();
     lutTwins();
+    bentNormalTwins();
     lightSampleTwins();
     helperProbes();
     return 0;

@@ -16,6 +16,7 @@ packages=(
   clang libclang-rt-14-dev           # the libFuzzer target on the OBJ loader (tests/fuzz)
   libepoxy-dev                       # a second GL loader, for the consumer test
   libgmp-dev                         # exact rational signs in blocker_filter_test
+  libmeshoptimizer-dev               # support/scene/weld.hpp: welding split vertices (bent normals)
 )
 
 missing=()
