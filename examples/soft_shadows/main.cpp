@@ -24,6 +24,7 @@
 // Adding a flag: a field in Args, one add_option line in addOptions(), its row in kModeFlags
 // (which modes use it) and its value checks in checkArgs(). Vector-valued flags parse with
 // parseVec3 (as --light-pos does).
+#include <penumbra/bent_normals.hpp>
 #include <penumbra/gl/headless.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/compare.hpp>
@@ -78,6 +79,8 @@ struct Args {
     bool reference = false;
     std::string view_samples = "depth";  // hard mode: depth (reconstructed from the depth buffer) | exact
     glm::dvec3 origin{0.0};              // the whole scene translated by this (double) offset
+    std::string shading = "bent";        // direct light: bent (sintorn2008 §4.3) | phong
+    bool compare_shading = false;        // also write <out stem>_shading.png: Phong | bent
 };
 
 /// The flags' text as given, before checkArgs turns them into Args values.
@@ -143,6 +146,14 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_option("--origin", raw.origin,
                    "translate scene, camera and light by x,y,z (in double); the GPU works camera-relative")
         ->type_name("X,Y,Z");
+    app.add_option("--shading", a.shading,
+                   "direct light: bent = sintorn2008 §4.3 bent normals (no light on light-back-facing triangles, "
+                   "no leak at the terminator), phong = Lambert with the smooth normals")
+        ->type_name("bent|phong")
+        ->check(CLI::IsMember({"bent", "phong"}))
+        ->capture_default_str();
+    app.add_flag("--compare-shading", a.compare_shading,
+                 "also write <out>_shading.png beside --out: the same frame with Phong (left) and bent (right)");
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
 }
@@ -406,6 +417,7 @@ Json reportHead(const Args& args, const char* mode) {
     j["scene"] = args.scene;
     j["mode"] = mode;
     j["origin"] = Json::array({args.origin.x, args.origin.y, args.origin.z});
+    j["shading"] = args.shading;
     return j;
 }
 
@@ -437,6 +449,63 @@ MergedScene merge(const penumbra::scene::Scene& scene) {
     return m;
 }
 
+/// Direct-light shading of a surface point: Lambert with the smooth normal (phong), or bent-normal
+/// shading (sintorn2008 §4.3, penumbra/bent_normals.hpp): l_bend per vertex toward the light centre,
+/// interpolated with the point's barycentrics in its triangle.
+class DirectShading {
+public:
+    DirectShading(const MergedScene& merged, const glm::dvec3& light) : merged_(merged) {
+        std::vector<glm::vec3> positions(merged.positions.begin(), merged.positions.end());
+        mesh_ = penumbra::bentNormalMesh(positions.data(), positions.size(), merged.indices.data(), merged.indices.size());
+        l_bend_.resize(positions.size());
+        for (uint32_t v = 0; v < positions.size(); ++v)
+            l_bend_[v] = penumbra::bentLight(mesh_, v, positions[v], glm::vec3(light));
+    }
+    /// n: the smooth shading normal, l: unit direction to the light, p: the point on `triangle`.
+    double direct(bool bent, uint32_t triangle, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& l) const {
+        const double l_f = glm::dot(n, l);
+        if (!bent) return std::max(0.0, l_f);
+        const uint32_t* t = &merged_.indices[size_t(triangle) * 3];
+        const glm::dvec3 a = merged_.positions[t[0]], b = merged_.positions[t[1]], c = merged_.positions[t[2]];
+        // Barycentrics of p's projection onto the triangle's plane (clamped: p lies on it up to rounding).
+        const glm::dvec3 e1 = b - a, e2 = c - a, d = p - a;
+        const double d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+        const double det = d11 * d22 - d12 * d12;
+        double u = 0, v = 0;
+        if (det > 0) {
+            u = std::clamp((d22 * glm::dot(d, e1) - d12 * glm::dot(d, e2)) / det, 0.0, 1.0);
+            v = std::clamp((d11 * glm::dot(d, e2) - d12 * glm::dot(d, e1)) / det, 0.0, 1.0 - u);
+        }
+        const float lb = float((1.0 - u - v) * l_bend_[t[0]] + u * l_bend_[t[1]] + v * l_bend_[t[2]]);
+        return penumbra::bentDirect(lb, float(l_f));
+    }
+
+private:
+    const MergedScene& merged_;
+    penumbra::BentNormalMesh mesh_;
+    std::vector<float> l_bend_;
+};
+
+/// <out stem>_shading.png beside `out`.
+std::string shadingComparePath(const std::string& out) {
+    const fs::path path(out);
+    return (path.parent_path() / (path.stem().string() + "_shading.png")).string();
+}
+
+/// Writes the Phong | bent image pair side by side.
+void writeShadingCompare(const std::string& out, const penumbra::scene::ImageRgb8& phong, const penumbra::scene::ImageRgb8& bent) {
+    penumbra::scene::ImageRgb8 pair;
+    pair.width = phong.width * 2;
+    pair.height = phong.height;
+    pair.pixels.resize(size_t(pair.width) * pair.height * 3);
+    for (uint32_t y = 0; y < phong.height; ++y) {
+        std::memcpy(&pair.pixels[size_t(y) * pair.width * 3], &phong.pixels[size_t(y) * phong.width * 3], phong.width * 3);
+        std::memcpy(&pair.pixels[(size_t(y) * pair.width + phong.width) * 3], &bent.pixels[size_t(y) * bent.width * 3],
+                    bent.width * 3);
+    }
+    penumbra::scene::writePng(shadingComparePath(out), pair);
+}
+
 /// Coplanar tolerance of the exact test for depth-reconstructed view samples: above the ~1e-5
 /// relative error of positions rebuilt from a 32-bit float depth buffer, so a sample is not
 /// shadowed by the very surface it was reconstructed from (docs/design.md).
@@ -444,7 +513,7 @@ constexpr double kDepthCoplanarEpsilon = 2e-5;
 
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
-            const std::vector<uint8_t>& material, const glm::dvec3& light_pos, double load_ms,
+            const MergedScene& merged, const glm::dvec3& light_pos, double load_ms,
             std::chrono::steady_clock::time_point t_start) {
     auto t0 = std::chrono::steady_clock::now();
     penumbra::gl::HeadlessContext context;
@@ -529,17 +598,21 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     }
     size_t shadowed = 0;
 
-    // Shade: Lambert with the hard visibility; rows flipped (GL's bottom row first).
+    // Shade: direct light (bent or Phong) with the hard visibility; rows flipped (GL's bottom row first).
     t0 = std::chrono::steady_clock::now();
-    penumbra::scene::ImageRgb8 image;
-    image.width = w;
-    image.height = h;
-    image.pixels.assign(size_t(w) * h * 3, 0);
+    const DirectShading direct(merged, light_pos);
+    const std::vector<uint8_t>& material = merged.material;
+    penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
+    for (auto& image : images) {
+        image.width = w;
+        image.height = h;
+        image.pixels.assign(size_t(w) * h * 3, 0);
+    }
     const glm::vec3 albedo[2] = {{0.75f, 0.75f, 0.72f}, {0.85f, 0.45f, 0.2f}};
     for (uint32_t y = 0; y < h; ++y) {
         for (uint32_t x = 0; x < w; ++x) {
             const size_t i = size_t(y) * w + x;
-            glm::vec3 c(0.08f, 0.09f, 0.12f);
+            glm::vec3 c[2] = {glm::vec3(0.08f, 0.09f, 0.12f), glm::vec3(0.08f, 0.09f, 0.12f)};
             if (exact_positions[i].w != 0.0f) {
                 uint32_t triangle = 0;
                 std::memcpy(&triangle, &faces[i].w, 4);
@@ -547,14 +620,21 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                 const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(exact_positions[i]));
                 const float lit = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
                 shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
-                c = albedo[triangle < material.size() ? material[triangle] : 1] *
-                    (0.12f + 0.88f * std::max(0.0f, glm::dot(n, l)) * lit);
+                const bool known = triangle < material.size();
+                for (int bent = 0; bent < 2; ++bent) {
+                    const float light = known ? float(direct.direct(bent == 1, triangle, glm::dvec3(exact_positions[i]),
+                                                                    glm::dvec3(n), glm::dvec3(l)))
+                                              : std::max(0.0f, glm::dot(n, l));
+                    c[bent] = albedo[known ? material[triangle] : 1] * (0.12f + 0.88f * light * lit);
+                }
             }
             const size_t o = (size_t(h - 1 - y) * w + x) * 3;
-            for (int k = 0; k < 3; ++k) image.pixels[o + k] = penumbra::scene::linearToSrgb8(c[k]);
+            for (int b = 0; b < 2; ++b)
+                for (int k = 0; k < 3; ++k) images[b].pixels[o + k] = penumbra::scene::linearToSrgb8(c[b][k]);
         }
     }
-    penumbra::scene::writePng(args.out, image);
+    penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
+    if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
     const double shade_ms = msSince(t0);
     const double total_ms = msSince(t_start);
     if (args.json) {
@@ -588,6 +668,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         j["timings_ms"] = {{"load", load_ms},        {"gbuffer", gbuffer_ms},        {"shadows", shadows_ms},
                            {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", total_ms}};
         j["out"] = args.out;
+        if (args.compare_shading) j["shading_compare"] = shadingComparePath(args.out);
         printReport(j);
     } else {
         std::printf("%s (hard, %s): %zu triangles, %zu samples tested, %zu shadowed, %.1f ms shadows -> %s\n",
@@ -662,28 +743,35 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
         evaluateWithProgress(oracle, receivers, light_samples, {}, "oracle visibility");
     const double visibility_ms = msSince(t0);
 
-    // ---- shade: Lambert with the sampled visibility, sRGB out ----
+    // ---- shade: direct light (bent or Phong) with the sampled visibility, sRGB out ----
     t0 = std::chrono::steady_clock::now();
-    penumbra::scene::ImageRgb8 image;
-    image.width = w;
-    image.height = h;
-    image.pixels.assign(pixels * 3, 0);
+    const DirectShading direct(merged, light_pos);
+    penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
+    for (auto& image : images) {
+        image.width = w;
+        image.height = h;
+        image.pixels.assign(pixels * 3, 0);
+    }
     const glm::dvec3 albedo[2] = {{0.75, 0.75, 0.72}, {0.85, 0.45, 0.2}};
     const glm::dvec3 sky(0.08, 0.09, 0.12);
     double lit_sum = 0;
     for (size_t i = 0; i < pixel_sample.size(); ++i) {
-        glm::dvec3 c = sky;
+        glm::dvec3 c[2] = {sky, sky};
         if (pixel_sample[i] >= 0) {
             const size_t r = static_cast<size_t>(pixel_sample[i]);
             const double vis = visibility.visibleFraction(r);
             lit_sum += vis;
             const glm::dvec3 l = glm::normalize(light_pos - hit_point[i]);
-            const double ndotl = std::max(0.0, glm::dot(hit_normal[i], l));
-            c = albedo[merged.material[hit_triangle[i]]] * (0.12 + 0.88 * ndotl * vis);
+            for (int bent = 0; bent < 2; ++bent) {
+                const double light = direct.direct(bent == 1, hit_triangle[i], hit_point[i], hit_normal[i], l);
+                c[bent] = albedo[merged.material[hit_triangle[i]]] * (0.12 + 0.88 * light * vis);
+            }
         }
-        for (int k = 0; k < 3; ++k) image.pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[k]));
+        for (int b = 0; b < 2; ++b)
+            for (int k = 0; k < 3; ++k) images[b].pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[b][k]));
     }
-    penumbra::scene::writePng(args.out, image);
+    penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
+    if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
     const double shade_ms = msSince(t0);
 
     const double total_ms = msSince(t_start);
@@ -703,6 +791,7 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
                            {"shade_and_write", shade_ms},
                            {"total", total_ms}};
         j["out"] = args.out;
+        if (args.compare_shading) j["shading_compare"] = shadingComparePath(args.out);
         printReport(j);
     } else {
         std::printf("%s: %zu triangles, %zu view samples x %zu light samples, %.1f ms -> %s\n", args.scene.c_str(),
@@ -784,7 +873,7 @@ int main(int argc, char** argv) {
         const MergedScene merged = merge(scene);
         const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
         const double load_ms = msSince(t0);
-        if (args.mode == "hard") return runHard(args, scene, oracle, merged.material, light_pos, load_ms, t_start);
+        if (args.mode == "hard") return runHard(args, scene, oracle, merged, light_pos, load_ms, t_start);
         return runReference(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
     } catch (const UsageError& e) {
         std::fprintf(stderr, "soft_shadows: %s\n(soft_shadows --help lists the options)\n", e.what.c_str());
