@@ -27,6 +27,7 @@
 #include <penumbra/bent_normals.hpp>
 #include <penumbra/gl/headless.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
+#include <penumbra/light_samples.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
@@ -81,11 +82,14 @@ struct Args {
     glm::dvec3 origin{0.0};              // the whole scene translated by this (double) offset
     std::string shading = "bent";        // direct light: bent (sintorn2008 §4.3) | phong
     bool compare_shading = false;        // also write <out stem>_shading.png: Phong | bent
+    uint32_t frames = 1;                 // reference mode: temporal accumulation over F frames
+    uint32_t frames_reference = 4096;    // ... against an oracle image with this many samples
 };
 
 /// The flags' text as given, before checkArgs turns them into Args values.
 struct RawArgs {
     std::string light_pos, light_radius, samples = "64", width = "512", height = "384", origin;
+    std::string frames = "1", frames_reference = "4096";
     bool no_ground = false;
 };
 
@@ -115,6 +119,8 @@ const ModeFlag kModeFlags[] = {
     {"--light-radius", true, false, "hard shadows use one light point, the light's centre"},
     {"--reference", false, true, "reference mode is the oracle already"},
     {"--view-samples", false, true, "reference mode traces exact primary rays on the CPU"},
+    {"--frames", true, false, "temporal accumulation runs on the oracle's soft shadows"},
+    {"--frames-reference", true, false, "temporal accumulation runs on the oracle's soft shadows"},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -154,6 +160,14 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
         ->capture_default_str();
     app.add_flag("--compare-shading", a.compare_shading,
                  "also write <out>_shading.png beside --out: the same frame with Phong (left) and bent (right)");
+    app.add_option("--frames", raw.frames,
+                   "reference mode: accumulate F frames, each with fresh light-sample sets (8 sets chosen per "
+                   "pixel, sintorn2008 §4.2 temporal jitter); reports the RMSE after every frame")
+        ->type_name("F")
+        ->capture_default_str();
+    app.add_option("--frames-reference", raw.frames_reference, "--frames: light samples of the oracle image the RMSE is against")
+        ->type_name("N")
+        ->capture_default_str();
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
 }
@@ -226,6 +240,11 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
         a.has_light_pos = true;
     }
     if (!raw.origin.empty()) a.origin = parseVec3(raw.origin, "--origin");
+    a.frames = parseCount(raw.frames, "--frames", 1, 1024);
+    a.frames_reference = parseCount(raw.frames_reference, "--frames-reference", 1, 1u << 16);
+    if (a.frames > 1 && (a.samples < 32 || a.samples > 1024 || a.samples % 32 != 0))
+        usageError("--frames draws light-sample sets (penumbra/light_samples.hpp): --samples must be a multiple of 32 in "
+                   "[32, 1024], got '", raw.samples, "'");
     checkOutPath(a.out);
 }
 
@@ -739,8 +758,67 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
 
     // ---- visibility: the exact oracle, every (view sample, light sample) pair ----
     t0 = std::chrono::steady_clock::now();
-    const penumbra::reference::VisibilityResult visibility =
-        evaluateWithProgress(oracle, receivers, light_samples, {}, "oracle visibility");
+    std::vector<double> visible(receivers.size());
+    uint64_t ties = 0;
+    Json temporal;
+    if (args.frames == 1) {
+        const penumbra::reference::VisibilityResult visibility =
+            evaluateWithProgress(oracle, receivers, light_samples, {}, "oracle visibility");
+        for (size_t r = 0; r < receivers.size(); ++r) visible[r] = visibility.visibleFraction(r);
+        ties = visibility.tie_count;
+    } else {
+        // Temporal accumulation (sintorn2008 §4.2, Fig. 7): frame f draws fresh K = 8 light-sample
+        // sets (seed f) and every pixel uses set lightSampleSet(x, y, f, 8), so neighbours differ
+        // and the running average converges; RMSE against an oracle image with many samples.
+        const std::vector<glm::dvec3> reference_samples =
+            penumbra::reference::sphereLightSamples(light_pos, light_radius, args.frames_reference, 7);
+        const penumbra::reference::VisibilityResult truth =
+            evaluateWithProgress(oracle, receivers, reference_samples, {}, "reference image");
+        std::vector<double> sum(receivers.size(), 0.0);
+        std::vector<uint32_t> pixel_of(receivers.size());
+        for (size_t i = 0; i < pixel_sample.size(); ++i)
+            if (pixel_sample[i] >= 0) pixel_of[static_cast<size_t>(pixel_sample[i])] = static_cast<uint32_t>(i);
+        penumbra::Light light;
+        light.center = light_pos;
+        light.size = glm::dvec3(light_radius);
+        const uint32_t sets = 8;
+        Json rmse = Json::array();
+        for (uint32_t f = 0; f < args.frames; ++f) {
+            penumbra::LightSampleOptions sample_options;
+            sample_options.count = args.samples;
+            sample_options.sets = sets;
+            sample_options.seed = 1000 + f;
+            const penumbra::LightSampleSets frame_sets = penumbra::makeLightSampleSets(light, sample_options);
+            for (uint32_t set = 0; set < sets; ++set) {
+                std::vector<size_t> members;
+                std::vector<glm::dvec3> points;
+                for (size_t r = 0; r < receivers.size(); ++r) {
+                    const uint32_t pixel = pixel_of[r];
+                    if (penumbra::lightSampleSet(pixel % w, pixel / w, f, sets) != set) continue;
+                    members.push_back(r);
+                    points.push_back(receivers[r]);
+                }
+                if (members.empty()) continue;
+                const std::vector<glm::dvec3> samples(frame_sets.worldSet(set), frame_sets.worldSet(set) + args.samples);
+                const penumbra::reference::VisibilityResult part = oracle.evaluate(points, samples);
+                for (size_t k = 0; k < members.size(); ++k) sum[members[k]] += part.visibleFraction(k);
+                ties += part.tie_count;
+            }
+            double squares = 0;
+            for (size_t r = 0; r < receivers.size(); ++r) {
+                const double e = sum[r] / (f + 1) - truth.visibleFraction(r);
+                squares += e * e;
+            }
+            const double value = receivers.empty() ? 0.0 : std::sqrt(squares / double(receivers.size()));
+            rmse.push_back(value);
+            std::fprintf(stderr, "soft_shadows: frame %u/%u: visibility RMSE %.5f vs %u-sample oracle (x sqrt(frames) = %.4f)\n",
+                         f + 1, args.frames, value, args.frames_reference, value * std::sqrt(double(f + 1)));
+        }
+        for (size_t r = 0; r < receivers.size(); ++r) visible[r] = sum[r] / args.frames;
+        temporal = {{"frames", args.frames},          {"sets", sets},
+                    {"samples_per_frame", args.samples}, {"reference_samples", args.frames_reference},
+                    {"rmse", rmse}};
+    }
     const double visibility_ms = msSince(t0);
 
     // ---- shade: direct light (bent or Phong) with the sampled visibility, sRGB out ----
@@ -759,7 +837,7 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
         glm::dvec3 c[2] = {sky, sky};
         if (pixel_sample[i] >= 0) {
             const size_t r = static_cast<size_t>(pixel_sample[i]);
-            const double vis = visibility.visibleFraction(r);
+            const double vis = visible[r];
             lit_sum += vis;
             const glm::dvec3 l = glm::normalize(light_pos - hit_point[i]);
             for (int bent = 0; bent < 2; ++bent) {
@@ -784,7 +862,9 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
         j["light_samples"] = light_samples.size();
         j["light"] = {{"position", vec3Json(light_pos)}, {"radius", light_radius}};
         j["mean_visible_fraction"] = receivers.empty() ? 0.0 : lit_sum / double(receivers.size());
-        j["reference"] = {{"ties", visibility.tie_count}, {"pairs", uint64_t(receivers.size()) * light_samples.size()}};
+        j["reference"] = {{"ties", ties},
+                          {"pairs", uint64_t(receivers.size()) * light_samples.size() * args.frames}};
+        if (args.frames > 1) j["temporal"] = temporal;
         j["timings_ms"] = {{"load", load_ms},
                            {"view_samples", primary_ms},
                            {"visibility", visibility_ms},
