@@ -6,9 +6,13 @@
 // vs the oracle is reported, and its bits are compared with the CPU twin's Lut mode: the GPU looks
 // the fp64 planes up after rounding them to float, the twin in double, so bits may differ where a
 // plane lies within float rounding of a LUT cell border (tolerance: 1e-3 of the bits).
+#include "support/alloc_counter.hpp"
+#include "support/gl_audit.hpp"
+
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/scene.hpp>
 
 #include "support/gl_test_support.hpp"
@@ -288,4 +292,123 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
     pipeline.reserve(4);
 #endif
     CHECK(pipeline.run(input, 4, lut_table, draw) == Status::Ok);
+}
+
+TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-pass == one pass, per-frame contract") {
+    penumbra::test::context();
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const penumbra::scene::GpuScene gpu(scene);
+    penumbra::scene::GBuffer gbuffer(96, 72);
+    const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
+    gbuffer.render(gpu, camera);
+    const std::vector<glm::vec4> positions = gbuffer.positionBuffer().download<glm::vec4>();
+    const uint32_t count = 96 * 72;
+    REQUIRE(positions.size() >= count);
+    const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), count);
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), lo, hi);
+    double far_depth = 0.0;
+    std::vector<dvec3> receivers;
+    std::vector<uint32_t> ids;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (positions[i].w == 0.0f) continue;
+        far_depth = std::max(far_depth, double((vp * glm::vec4(glm::vec3(positions[i]), 1.0f)).w));
+        receivers.push_back(dvec3(glm::vec3(positions[i])));
+        ids.push_back(i);
+    }
+    REQUIRE(!receivers.empty());
+    penumbra::Light light;
+    light.center = dvec3(scene.light.position);
+    light.size = dvec3(double(scene.light.radius));
+    penumbra::LightSampleOptions so;
+    so.count = 128;
+    so.sets = 1;
+    so.seed = 5;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    penumbra::LightLutOptions lo_options;
+    lo_options.resolution = 64;
+    lo_options.certified = true;
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
+    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
+    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 64;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    const penumbra::SampleBufferInput input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
+    const penumbra::SampleBasedSoftShadows::DrawCasters draw = [&] { gpu.draw(); };  // built once, outside the frame
+
+    std::vector<uint32_t> reference_masks;
+    for (const uint32_t list_block : {16u, 2u}) {
+        INFO("list_block " << list_block);
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.grid_width = options.grid_height = 64;
+        options.list_block = list_block;
+        options.max_list_blocks = 256;
+        penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
+        pipeline.reserve(count);
+        pipeline.validate(input, count, lut_table);
+        REQUIRE(pipeline.run(input, count, lut_table, draw) == Status::Ok);
+        const std::vector<uint32_t> masks = pipeline.readMasks();
+        const std::vector<float> visibility = pipeline.readVisibility();
+        const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+        if (reference_masks.empty()) {
+            const penumbra::scene::Mesh merged = scene.merged();
+            const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
+            const penumbra::reference::VisibilityResult truth =
+                oracle.evaluate(receivers, std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128));
+            uint64_t mismatched = 0, ties = 0, untested = 0, blocked = 0, background_ok = 0;
+            for (size_t r = 0; r < ids.size(); ++r) {
+                if (visibility[ids[r]] < 0.0f) {
+                    ++untested;
+                    continue;
+                }
+                blocked += truth.blockedCount(r);
+                for (uint32_t s = 0; s < 128; ++s) {
+                    if (truth.isTie(r, s)) {
+                        ++ties;
+                        continue;
+                    }
+                    mismatched += bitOf(masks, 4, ids[r], s) != truth.isBlocked(r, s);
+                }
+            }
+            for (uint32_t i = 0; i < count; ++i)
+                background_ok += positions[i].w == 0.0f && visibility[i] == float(PENUMBRA_SBS_VISIBILITY_NO_SAMPLE);
+            MESSAGE("G-buffer 96x72, N=128: ", receivers.size(), " samples, ", blocked, " blocked bits, ", ties, " ties, mismatched ",
+                    mismatched, ", untested ", untested, "; passes ", f.passes, ", uncertain ",
+                    double(f.uncertain_bits) / double(std::max<uint64_t>(f.pairs * 128, 1)), " of pair bits");
+            CHECK(blocked > 0);
+            CHECK(mismatched == 0);
+            CHECK(untested == 0);
+            CHECK(background_ok == count - receivers.size());
+            reference_masks = masks;
+        } else {
+            MESSAGE("list_block 2: ", f.passes, " passes (max list ", f.statistics.max_list_length, ")");
+            CHECK(f.passes > 1);
+            CHECK(f.overflow == 0);
+            CHECK(masks == reference_masks);
+        }
+        // Per-frame contract (docs/design.md convention 2): after warm-up, no query, error check,
+        // read-back, map, wait or allocation.
+        glFinish();
+        penumbra::test::GlAudit audit;
+        penumbra::test::AllocationCounter heap;
+        audit.start();
+        heap.start();
+        const Status status = pipeline.run(input, count, lut_table, draw);
+        heap.stop();
+        audit.stop();
+        INFO(audit.report());
+        CHECK(status == Status::Ok);
+        CHECK(audit.calls() > 0);
+        CHECK(audit.queries() == 0);
+        CHECK(audit.errorChecks() == 0);
+        CHECK(audit.readBacks() == 0);
+        CHECK(audit.maps() == 0);
+        CHECK(audit.syncWaits() == 0);
+        CHECK(heap.allocations() == 0);
+        MESSAGE("run: ", audit.calls(), " GL calls, ", audit.queries(), " queries, ", heap.allocations(), " allocations");
+        glBindBuffer(0xDEADu, 0);  // an engine's queued error survives run()
+        pipeline.run(input, count, lut_table, draw);
+        CHECK(glGetError() == GL_INVALID_ENUM);
+    }
 }
