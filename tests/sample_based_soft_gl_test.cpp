@@ -344,6 +344,7 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
         options.grid_width = options.grid_height = 64;
         options.list_block = list_block;
         options.max_list_blocks = 256;
+        options.timings = true;
         penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
         pipeline.reserve(count);
         pipeline.validate(input, count, lut_table);
@@ -383,6 +384,11 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
             reference_masks = masks;
         } else {
             MESSAGE("list_block 2: ", f.passes, " passes (max list ", f.statistics.max_list_length, ")");
+        }
+        // Plumbing only: llvmpipe's GL_TIME_ELAPSED values are not usable (benchmarks/scan_bench.cpp).
+        MESSAGE("list_block ", list_block, " GPU timer ms (meaningless on llvmpipe): lists ", f.lists_ns * 1e-6, ", light pass ",
+                f.light_pass_ns * 1e-6, ", resolve ", f.resolve_ns * 1e-6);
+        if (list_block == 2) {
             CHECK(f.passes > 1);
             CHECK(f.overflow == 0);
             CHECK(masks == reference_masks);

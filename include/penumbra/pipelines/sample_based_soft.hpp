@@ -337,6 +337,9 @@ struct SampleBasedSoftGpuOptions {
     /// the other quarter: 0.25 leaves it.
     double plane_budget = 0.25;
     bool count_work = true;  ///< work counters (atomics in the light pass)
+    /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
+    /// the resolve), read by readFrame(). Off: no query calls per frame.
+    bool timings = false;
 };
 
 inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o) {

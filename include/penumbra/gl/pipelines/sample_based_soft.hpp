@@ -34,7 +34,8 @@
 //             s / 32: light sample s of its set blocked) in masks() or your range, and the visible
 //             fraction 1 - popcount / N as a float per id (PENUMBRA_SBS_VISIBILITY_NO_SAMPLE /
 //             _UNTESTED otherwise) in visibility() or your range; on request (readFrame(), which
-//             waits) list statistics, passes and work counters; readMasks() / readVisibility().
+//             waits) list statistics, passes, work counters and (options.timings) per-stage GPU
+//             times; readMasks() / readVisibility().
 //   per frame: run() — (1) lists (count, scan, scatter; the influence setup's view-projection)
 //             + statistics, (2) a predicate pass: one point per list block inside an occlusion
 //             query, surviving when the longest list needs that block, (3) the light pass: for
@@ -104,6 +105,9 @@ struct SampleBasedSoftFrame {
     // Work counters (count_work; overflow always).
     uint64_t fragments = 0, pairs = 0, pairs_ignored = 0, pairs_unproven = 0, uncertain_bits = 0, exact_tests = 0,
              planes_unproven = 0, overflow = 0;
+    /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
+    /// statistics), light pass (predicate + every list block), resolve.
+    uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
 };
 
 class SampleBasedSoftShadows {
@@ -168,6 +172,10 @@ public:
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
         empty_vao_ = gl::VertexArray::create();
         for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
+        if (options_.timings) {
+            timers_.reserve(3);
+            for (int t = 0; t < 3; ++t) timers_.emplace_back();
+        }
         vp_ = view_projection;
         light_.view_projection = vp_;
         light_.light = glm::vec4(glm::vec3(influence_.frame.center), 1.0f);
@@ -228,7 +236,9 @@ public:
         for (const BufferRange* r : {&lut_table, &frame.sets, &frame.masks, &frame.visibility})
             if (!r->empty() && r->offset % ssbo_alignment_ != 0) return fail(Status::Misaligned);
         setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);  // <= reserved: no throw
+        if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
         if (built != Status::Ok) return built;
         lightPassAndResolve(lut_table, draw_casters, frame);
         return Status::Ok;
@@ -249,6 +259,11 @@ public:
         f.exact_tests = w[PENUMBRA_SBS_WORK_EXACT_TESTS];
         f.planes_unproven = w[PENUMBRA_SBS_WORK_PLANES_UNPROVEN];
         f.overflow = w[PENUMBRA_SBS_WORK_OVERFLOW];
+        if (!timers_.empty()) {
+            f.lists_ns = timers_[0].nanoseconds();
+            f.light_pass_ns = timers_[1].nanoseconds();
+            f.resolve_ns = timers_[2].nanoseconds();
+        }
         return f;
     }
     /// The executor's masks / visibility of the last run (waits): sample_count * words / sample_count.
@@ -284,6 +299,7 @@ private:
     gl::Framebuffer framebuffer_;
     gl::VertexArray empty_vao_;
     std::vector<gl::OcclusionQuery> block_queries_;
+    std::vector<gl::GpuTimer> timers_;  // options.timings: lists, light pass, resolve
     std::vector<uint8_t> params_staging_;
     uint32_t ubo_alignment_ = 256, ssbo_alignment_ = 256, param_stride_ = 512;
     uint32_t reserved_ = 0;
@@ -335,6 +351,7 @@ private:
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
+        if (!timers_.empty()) timers_[1].begin();
         // (2) Which list blocks does the longest list need? One point per block, on the GPU.
         blocks_.use();
         glBindVertexArray(empty_vao_.id());
@@ -373,7 +390,9 @@ private:
             glEndConditionalRender();
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        if (!timers_.empty()) timers_[1].end();
         // (4) Resolve.
+        if (!timers_.empty()) timers_[2].begin();
         resolve_.use();
         bindParams(0);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, sample_slots_.id());
@@ -388,6 +407,7 @@ private:
         }
         const detail::DispatchGrid grid = detail::foldDispatch(detail::divUp(setup_.sample_count, 256));
         if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
+        if (!timers_.empty()) timers_[2].end();
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     }
 };
