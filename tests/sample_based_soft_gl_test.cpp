@@ -418,3 +418,98 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
         CHECK(glGetError() == GL_INVALID_ENUM);
     }
 }
+
+TEST_CASE("GPU sample-based soft: depth-reconstructed view samples, exact == oracle on the positions the GPU used") {
+    penumbra::test::context();
+    const penumbra::scene::Scene scene = penumbra::scene::columns(4);
+    const penumbra::scene::GpuScene gpu(scene);
+    penumbra::scene::GBuffer gbuffer(96, 72);
+    const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
+    gbuffer.render(gpu, camera);
+    const uint32_t count = 96 * 72;
+    const std::vector<glm::vec4> gpositions = gbuffer.positionBuffer().download<glm::vec4>();
+    const auto [lo0, hi0] = penumbra::viewSampleBounds(gpositions.data(), count);
+    // Depth reconstruction moves samples by ~1e-5 relative: widen the box so every one is inside.
+    const glm::vec3 pad = 0.01f * (hi0 - lo0) + glm::vec3(1e-3f);
+    const glm::vec3 lo = lo0 - pad, hi = hi0 + pad;
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), lo, hi);
+    double far_depth = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 x((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z);
+        far_depth = std::max(far_depth, double((vp * glm::vec4(x, 1.0f)).w));
+    }
+    penumbra::Light light;
+    light.center = dvec3(scene.light.position);
+    light.size = dvec3(double(scene.light.radius));
+    penumbra::LightSampleOptions so;
+    so.count = 128;
+    so.sets = 1;
+    so.seed = 7;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    penumbra::LightLutOptions lo_options;
+    lo_options.resolution = 64;
+    lo_options.certified = true;
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
+    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
+    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 64;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    penumbra::SampleListsView view;
+    view.width = 96;
+    view.height = 72;
+    view.inverse_view_projection = glm::inverse(camera);
+    const penumbra::SampleDepthInput input{gbuffer.depthTexture(), 0, view};
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.grid_width = options.grid_height = 64;
+    options.max_list_blocks = 256;
+    penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
+    pipeline.reserve(count);
+    pipeline.validate(input, lut_table);
+    REQUIRE(pipeline.run(input, lut_table, [&] { gpu.draw(); }) == Status::Ok);
+    const std::vector<uint32_t> masks = pipeline.readMasks();
+    const std::vector<float> visibility = pipeline.readVisibility();
+    const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+    // The positions the GPU reconstructed and tested: the lists' slots.
+    const penumbra::SampleListsBuffers lists = pipeline.buffers();
+    const uint32_t listed = f.statistics.accepted;
+    REQUIRE(listed > 0);
+    std::vector<glm::vec4> slot_positions(listed);
+    std::vector<uint32_t> slot_ids(listed);
+    glGetNamedBufferSubData(lists.list_positions.buffer, 0, GLsizeiptr(listed) * 16, slot_positions.data());
+    glGetNamedBufferSubData(lists.list_ids.buffer, 0, GLsizeiptr(listed) * 4, slot_ids.data());
+    std::vector<dvec3> receivers;
+    for (const auto& p : slot_positions) receivers.push_back(dvec3(glm::vec3(p)));
+    const penumbra::scene::Mesh merged = scene.merged();
+    const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
+    const penumbra::reference::VisibilityResult truth =
+        oracle.evaluate(receivers, std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128));
+    uint64_t mismatched = 0, ties = 0, blocked = 0, untested = 0;
+    for (uint32_t r = 0; r < listed; ++r) {
+        const uint32_t id = slot_ids[r];
+        if (visibility[id] < 0.0f) {
+            ++untested;
+            continue;
+        }
+        blocked += truth.blockedCount(r);
+        for (uint32_t s = 0; s < 128; ++s) {
+            if (truth.isTie(r, s)) {
+                ++ties;
+                continue;
+            }
+            mismatched += bitOf(masks, 4, id, s) != truth.isBlocked(r, s);
+        }
+    }
+    uint32_t rejected_not_background = 0;
+    for (uint32_t reason = 1; reason < f.statistics.rejected.size(); ++reason) rejected_not_background += f.statistics.rejected[reason];
+    MESSAGE("depth input 96x72 columns, N=128: ", listed, " listed samples (", rejected_not_background,
+            " rejected other than background), ", blocked, " blocked bits, ", ties, " ties, mismatched ", mismatched,
+            ", untested ", untested, "; passes ", f.passes, ", uncertain ",
+            double(f.uncertain_bits) / double(std::max<uint64_t>(f.pairs * 128, 1)), " of pair bits, unproven pairs ",
+            f.pairs_unproven, " of ", f.pairs);
+    CHECK(blocked > 0);
+    CHECK(mismatched == 0);
+    CHECK(untested == 0);
+    CHECK(rejected_not_background == 0);
+}

@@ -25,7 +25,9 @@
 //             the integrator's ranges once (GL queries, throws).
 //   input:    view samples as ranges of vec4 world positions (w == 0 = none) and vec4 normals
 //             (SampleBufferInput; normals unused: every sample is tested, light-back-facing ones
-//             included, so the result is the oracle's); the LUT table (LightLutGenerator's, or
+//             included, so the result is the oracle's), or the engine's depth buffer + inverse
+//             view-projection (SampleDepthInput: positions reconstructed on the GPU; the lists'
+//             list_positions / list_ids hold the float positions the exact test used); the LUT table (LightLutGenerator's, or
 //             generateLightLut uploaded) as a BufferRange; optionally a uint per sample id naming
 //             its light-sample set (lightSampleSet per pixel; empty = set 0); a callback that
 //             draws every caster (positions through penumbraAfhCasterPosition(), attribute 0 by
@@ -213,29 +215,39 @@ public:
     /// Load-time checks of the integrator's ranges (GL queries; throws naming the range).
     void validate(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
                   const SbsFrameBuffers& frame = {}) const {
-        const char* f = "SampleBasedSoftShadows::validate";
         const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);
         builder_.validate(s, input, buffers(), listOptions());
-        if (options_.mode != SoftMode::Brute) gl::validateRange(lut_table, lut_.tableBytes(), "lut table", f, ssbo_alignment_);
-        if (!frame.sets.empty()) gl::validateRange(frame.sets, uint64_t(sample_count) * 4, "sets", f, ssbo_alignment_);
-        if (!frame.masks.empty())
-            gl::validateRange(frame.masks, uint64_t(sample_count) * words_ * 4, "masks", f, ssbo_alignment_);
-        if (!frame.visibility.empty())
-            gl::validateRange(frame.visibility, uint64_t(sample_count) * 4, "visibility", f, ssbo_alignment_);
+        validateFrame(sample_count, lut_table, frame);
     }
 
-    /// Every pass (see the summary). `lut_table` may be empty in Brute mode.
+    void validate(const SampleDepthInput& input, const BufferRange& lut_table, const SbsFrameBuffers& frame = {}) const {
+        const uint32_t n = input.view.width * input.view.height;
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, n);
+        builder_.validate(s, input, buffers(), listOptions());
+        validateFrame(n, lut_table, frame);
+    }
+
+    /// Every pass for buffer input (see the summary). `lut_table` may be empty in Brute mode.
     Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
                const DrawCasters& draw_casters, const SbsFrameBuffers& frame = {}) {
-        if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
-        if (!draw_casters) return fail(Status::InvalidArgument);
-        if (options_.mode != SoftMode::Brute && !lut_table.holds(lut_.tableBytes())) return fail(Status::RangeTooSmall);
-        if (!frame.sets.empty() && !frame.sets.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
-        if (!frame.masks.empty() && !frame.masks.holds(uint64_t(sample_count) * words_ * 4)) return fail(Status::RangeTooSmall);
-        if (!frame.visibility.empty() && !frame.visibility.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
-        for (const BufferRange* r : {&lut_table, &frame.sets, &frame.masks, &frame.visibility})
-            if (!r->empty() && r->offset % ssbo_alignment_ != 0) return fail(Status::Misaligned);
-        setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);  // <= reserved: no throw
+        const Status s = begin(sample_count, lut_table, draw_casters, frame);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, draw_casters, frame);
+        return Status::Ok;
+    }
+
+    /// Every pass for depth input (positions reconstructed on the GPU from the engine's depth
+    /// buffer; sample count = view width * height, id = y * width + x). The normal texture may be 0.
+    Status run(const SampleDepthInput& input, const BufferRange& lut_table, const DrawCasters& draw_casters,
+               const SbsFrameBuffers& frame = {}) {
+        const uint64_t n = uint64_t(input.view.width) * input.view.height;
+        if (n > reserved_) return fail(Status::NotReserved);
+        const Status s = begin(static_cast<uint32_t>(n), lut_table, draw_casters, frame);
+        if (s != Status::Ok) return s;
         if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
         if (!timers_.empty()) timers_[0].end();
@@ -305,6 +317,30 @@ private:
     uint32_t reserved_ = 0;
     SampleListsSetup setup_;
     SampleListsLight light_;
+
+    void validateFrame(uint32_t sample_count, const BufferRange& lut_table, const SbsFrameBuffers& frame) const {
+        const char* f = "SampleBasedSoftShadows::validate";
+        if (options_.mode != SoftMode::Brute) gl::validateRange(lut_table, lut_.tableBytes(), "lut table", f, ssbo_alignment_);
+        if (!frame.sets.empty()) gl::validateRange(frame.sets, uint64_t(sample_count) * 4, "sets", f, ssbo_alignment_);
+        if (!frame.masks.empty())
+            gl::validateRange(frame.masks, uint64_t(sample_count) * words_ * 4, "masks", f, ssbo_alignment_);
+        if (!frame.visibility.empty())
+            gl::validateRange(frame.visibility, uint64_t(sample_count) * 4, "visibility", f, ssbo_alignment_);
+    }
+
+    Status begin(uint32_t sample_count, const BufferRange& lut_table, const DrawCasters& draw_casters,
+                 const SbsFrameBuffers& frame) {
+        if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
+        if (!draw_casters) return fail(Status::InvalidArgument);
+        if (options_.mode != SoftMode::Brute && !lut_table.holds(lut_.tableBytes())) return fail(Status::RangeTooSmall);
+        if (!frame.sets.empty() && !frame.sets.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
+        if (!frame.masks.empty() && !frame.masks.holds(uint64_t(sample_count) * words_ * 4)) return fail(Status::RangeTooSmall);
+        if (!frame.visibility.empty() && !frame.visibility.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
+        for (const BufferRange* r : {&lut_table, &frame.sets, &frame.masks, &frame.visibility})
+            if (!r->empty() && r->offset % ssbo_alignment_ != 0) return fail(Status::Misaligned);
+        setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);  // <= reserved: no throw
+        return Status::Ok;
+    }
 
     static Status fail(Status s) {
         PENUMBRA_ASSERT(s == Status::Ok && "penumbra::SampleBasedSoftShadows: per-frame misuse (see the returned Status)");
