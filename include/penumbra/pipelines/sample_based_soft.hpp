@@ -37,6 +37,17 @@
 //
 // Bad input (penumbra::Error): a LUT not built for these sets (N, K), Exact with a LUT that is not
 // certified, receiver sets out of range, non-finite positions, indices out of range.
+//
+// GPU pipeline setup (GL-free, after the twin): SampleBasedSoftGpuOptions (mode, grid, list
+// blocks, the oracle's epsilons, plane budget, work counters, timers) and its validation,
+// sampleBasedSoftParams() (the light pass's PenumbraSbsParams block: light frame, bounds, budget,
+// epsilons, grid, LUT params; shaders/penumbra/sample_based_soft/sample_based_soft_shared.h) and
+// sampleBasedSoftWorldSamples() (the fp64 world samples the exact test reads). The executor is
+// penumbra/gl/pipelines/sample_based_soft.hpp; its fragment stage runs this twin's per-pair steps
+// in fp64 (light_pass.frag.glsl), except that it looks the planes up in float (the twin: double)
+// and proves them against plane_budget (0.25 of the tolerance; the twin: 0.5). Exact and Brute
+// stay equal to the oracle; Lut may differ from the twin's Lut in bits whose plane lies within
+// float rounding of a cell border (measured: 0-2 bits of 51 200).
 #ifndef PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
 #define PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
 
