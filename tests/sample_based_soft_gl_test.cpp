@@ -101,17 +101,15 @@ struct Case {
 
 }  // namespace
 
-TEST_CASE("GPU sample-based soft: exact and brute equal the oracle, lut reported and close to the CPU twin") {
+namespace {
+
+/// Every mode on every case: N = 128, and 1024 on the torus knot (on every case when `all_1024`).
+void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all_1024) {
     penumbra::test::context();
     const uint32_t seed = penumbra::test::testSeed();
-    std::vector<Case> cases;
-    cases.push_back({"torus_knot", penumbra::scene::torusKnot(24)});
-    cases.push_back({"columns", penumbra::scene::columns(4)});
-    cases.push_back({"hairball", penumbra::scene::hairball(600, 3)});
-    const size_t receiver_count = 400;
     for (const Case& c : cases) {
         std::vector<uint32_t> counts = {128u};
-        if (c.name == "torus_knot") counts.push_back(1024u);
+        if (all_1024 || c.name == "torus_knot") counts.push_back(1024u);
         for (const uint32_t n : counts) {
             INFO(c.name << " N=" << n);
             const penumbra::scene::Mesh mesh = c.scene.merged();
@@ -248,6 +246,27 @@ TEST_CASE("GPU sample-based soft: exact and brute equal the oracle, lut reported
                 if (mode == penumbra::SoftMode::Exact) CHECK(f.uncertain_bits < f.pairs * n / 5);
             }
         }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("GPU sample-based soft: exact and brute equal the oracle, lut reported and close to the CPU twin") {
+    std::vector<Case> cases;
+    cases.push_back({"torus_knot", penumbra::scene::torusKnot(24)});
+    cases.push_back({"columns", penumbra::scene::columns(4)});
+    cases.push_back({"hairball", penumbra::scene::hairball(600, 3)});
+    checkScenes(cases, 400, false);
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("GPU sample-based soft (stress): 2000 receivers, N = 128 and 1024 on every scene, grass too") {
+        std::vector<Case> cases;
+        cases.push_back({"torus_knot", penumbra::scene::torusKnot(24)});
+        cases.push_back({"columns", penumbra::scene::columns(4)});
+        cases.push_back({"hairball", penumbra::scene::hairball(600, 3)});
+        cases.push_back({"grass", penumbra::scene::grass(150, 3)});
+        checkScenes(cases, 2000, true);
     }
 }
 
