@@ -37,6 +37,17 @@
 //
 // Bad input (penumbra::Error): a LUT not built for these sets (N, K), Exact with a LUT that is not
 // certified, receiver sets out of range, non-finite positions, indices out of range.
+//
+// GPU pipeline setup (GL-free, after the twin): SampleBasedSoftGpuOptions (mode, grid, list
+// blocks, the oracle's epsilons, plane budget, work counters, timers) and its validation,
+// sampleBasedSoftParams() (the light pass's PenumbraSbsParams block: light frame, bounds, budget,
+// epsilons, grid, LUT params; shaders/penumbra/sample_based_soft/sample_based_soft_shared.h) and
+// sampleBasedSoftWorldSamples() (the fp64 world samples the exact test reads). The executor is
+// penumbra/gl/pipelines/sample_based_soft.hpp; its fragment stage runs this twin's per-pair steps
+// in fp64 (light_pass.frag.glsl), except that it looks the planes up in float (the twin: double)
+// and proves them against plane_budget (0.25 of the tolerance; the twin: 0.5). Exact and Brute
+// stay equal to the oracle; Lut may differ from the twin's Lut in bits whose plane lies within
+// float rounding of a cell border (measured: 0-2 bits of 51 200).
 #ifndef PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
 #define PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
 
@@ -50,9 +61,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <vector>
+
+// The GPU pipeline's parameter block (opens namespace penumbra::shared itself).
+#if defined(__has_include) && __has_include(<penumbra/sample_based_soft/sample_based_soft_shared.h>)
+#include <penumbra/sample_based_soft/sample_based_soft_shared.h>
+#else
+#include "../../../shaders/penumbra/sample_based_soft/sample_based_soft_shared.h"
+#endif
 
 namespace penumbra {
 
@@ -302,6 +321,93 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         }
     }
     return result;
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// GPU pipeline setup (GL-free; the executor is penumbra/gl/pipelines/sample_based_soft.hpp).
+
+using SbsParams = shared::PenumbraSbsParams;
+static_assert(sizeof(SbsParams) == 7 * 32 + 4 * 16 + 48, "std140 layout the shaders assume: 7 dvec4, 4 uvec4, the LUT block");
+static_assert(offsetof(SbsParams, grid) == 224 && offsetof(SbsParams, lut) == 288, "PenumbraSbsParams offsets");
+
+/// Options of gl::SampleBasedSoftShadows (value-initialised = defaults; the grid size must be set).
+struct SampleBasedSoftGpuOptions {
+    SoftMode mode = SoftMode::Exact;
+    uint32_t grid_width = 0, grid_height = 0;  ///< light grid (sample lists and influence regions)
+    /// View samples one fragment walks per pass (sintorn2008 §3.1's blocks). Keep
+    /// list_block * N (brute / unproven pairs) below llvmpipe's 65 535 loop iterations per invocation.
+    uint32_t list_block = 16;
+    uint32_t max_list_blocks = 64;  ///< passes at most (decided on the GPU); samples beyond are untested
+    /// The oracle's tolerances the exact test reproduces (coplanar rule 2; tie_epsilon only widens
+    /// the proof margins): compare with reference::VisibilityOracle built with the same options.
+    reference::VisibilityOptions oracle{};
+    /// Fraction of the LUT's tolerance a plane's rounding may use before the plane counts as
+    /// unproven (all-uncertain). The CPU twin uses 0.5; the GPU looks planes up in float after the
+    /// fp64 construction, and the rounding to float (<= 3 * 2^-24 in d and in the normal) takes
+    /// the other quarter: 0.25 leaves it.
+    double plane_budget = 0.25;
+    bool count_work = true;  ///< work counters (atomics in the light pass)
+    /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
+    /// the resolve), read by readFrame(). Off: no query calls per frame.
+    bool timings = false;
+};
+
+inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o) {
+    PENUMBRA_CHECK(o.mode == SoftMode::Exact || o.mode == SoftMode::Lut || o.mode == SoftMode::Brute,
+                   "penumbra::SampleBasedSoftShadows: unknown mode ", static_cast<uint32_t>(o.mode));
+    PENUMBRA_CHECK(o.grid_width >= 1 && o.grid_width <= 8192 && o.grid_height >= 1 && o.grid_height <= 8192,
+                   "penumbra::SampleBasedSoftShadows: grid ", o.grid_width, " x ", o.grid_height, " must be 1 .. 8192 per side");
+    PENUMBRA_CHECK(o.list_block >= 1 && o.list_block <= 4096, "penumbra::SampleBasedSoftShadows: list_block = ", o.list_block,
+                   " must be in [1, 4096]");
+    PENUMBRA_CHECK(o.max_list_blocks >= 1 && o.max_list_blocks <= 4096, "penumbra::SampleBasedSoftShadows: max_list_blocks = ",
+                   o.max_list_blocks, " must be in [1, 4096]");
+    PENUMBRA_CHECK(o.oracle.coplanar_epsilon >= 0.0 && o.oracle.coplanar_epsilon <= 0.1 && o.oracle.tie_epsilon >= 0.0 &&
+                       o.oracle.tie_epsilon <= 0.1,
+                   "penumbra::SampleBasedSoftShadows: oracle epsilons must be in [0, 0.1]");
+    PENUMBRA_CHECK(o.plane_budget > 0.0 && o.plane_budget <= 0.5, "penumbra::SampleBasedSoftShadows: plane_budget = ",
+                   o.plane_budget, " must be in (0, 0.5]");
+}
+
+/// The light-pass parameter block for list block `block` (the host fills one slot per block).
+/// `lut` may be null in Brute mode. Throws penumbra::Error when the LUT does not fit the sets.
+inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const LightSampleSets& sets,
+                                       const LightLutSetup* lut, uint32_t sample_count, uint32_t block, bool has_sets) {
+    const uint32_t n = sets.count(), k = sets.sets();
+    if (o.mode != SoftMode::Brute) {
+        PENUMBRA_CHECK(lut != nullptr, "penumbra::SampleBasedSoftShadows: mode ", softModeName(o.mode), " needs a LUT");
+        PENUMBRA_CHECK(lut->params.samples_per_set == n && lut->params.sets == k, "penumbra::SampleBasedSoftShadows: the LUT was built for ",
+                       lut->params.sets, " sets of ", lut->params.samples_per_set, " samples, the light has ", k, " of ", n);
+        PENUMBRA_CHECK(o.mode != SoftMode::Exact || lut->options.certified,
+                       "penumbra::SampleBasedSoftShadows: mode exact needs a certified LUT (LightLutOptions::certified)");
+    }
+    const LightFrame& f = sets.frame;
+    SbsParams p{};
+    p.center = glm::dvec4(f.center, 0.0);
+    for (int i = 0; i < 3; ++i) p.rotation[i] = glm::dvec4(f.rotation[i], 0.0);
+    const double min_scale = std::min(f.scale.x, std::min(f.scale.y, f.scale.z));
+    const double max_scale = std::max(f.scale.x, std::max(f.scale.y, f.scale.z));
+    p.scale = glm::dvec4(f.scale, min_scale);
+    const double light_reach = max_scale * std::sqrt(3.0);
+    const double budget = (lut ? lut->options.tolerance : 0.0) * o.plane_budget;
+    p.bounds = glm::dvec4(light_reach, detail::oracle::length3(f.center) + light_reach, budget, budget * min_scale);
+    p.epsilon = glm::dvec4(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon,
+                           std::max(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon), 0.0);
+    p.grid = glm::uvec4(o.grid_width, o.grid_height, o.list_block, block);
+    p.config = glm::uvec4(static_cast<uint32_t>(o.mode), n, k, (n + 31) / 32);
+    p.counts = glm::uvec4(sample_count, o.max_list_blocks * o.list_block, lut ? lut->params.tables_per_set : (n + 127) / 128,
+                          has_sets ? 1u : 0u);
+    if (lut) p.lut = lut->params;
+    return p;
+}
+
+/// World light samples as the GPU reads them: dvec4 (xyz, 0) per sample, set-major (K * N).
+inline std::vector<glm::dvec4> sampleBasedSoftWorldSamples(const LightSampleSets& sets) {
+    std::vector<glm::dvec4> out;
+    out.reserve(size_t(sets.count()) * sets.sets());
+    for (uint32_t s = 0; s < sets.sets(); ++s)
+        for (uint32_t i = 0; i < sets.count(); ++i) out.emplace_back(sets.worldSet(s)[i], 0.0);
+    return out;
 }
 
 }  // namespace penumbra

@@ -1,0 +1,453 @@
+// penumbra — sample-based soft shadows (sintorn2008 §4, Fig. 5, 6) on the GPU: view samples →
+// lists → light pass rasterizing each caster's influence region → for every view sample of a
+// covered texel the LUT masks of the 3 edge planes + the supporting plane (AND), OR-ed into the
+// sample's N-bit mask → resolve (visible fraction). Composed from the blocks' public APIs:
+// penumbra/gl/sample_lists.hpp (lists), penumbra/influence_region.hpp (the hull, §4.1),
+// penumbra/light_lut.hpp + lookup.glsl (masks, §4.2), the hard pipeline's exact segment test
+// (blocker_test.glsl) for the bits the certified LUT cannot vouch for, and its caster hook and
+// list-block predicate. Options, pure setup and the CPU twin of the per-pair work:
+// penumbra/pipelines/sample_based_soft.hpp (no GL).
+//
+// Integration summary
+//   needs:    GL 4.5 with fp64 in shaders (the planes and the exact test are fp64 in every mode),
+//             geometry shaders, 9 fragment-stage storage blocks (checked at construction);
+//             shaders penumbra/sample_based_soft/*, penumbra/alias_free_hard/{caster_position,
+//             blocker_test,degenerate}.glsl and blocks.vert.glsl, penumbra/influence_region/*,
+//             penumbra/light_lut/lookup.glsl, penumbra/sample_lists/*.
+//   setup:    SampleBasedSoftShadows(options, sets, lut, influence, view_projection, library,
+//             bindings): `sets` the
+//             light samples (K sets of N; uploaded as fp64 world positions), `lut` the LUT's setup
+//             (certified for Exact; null allowed for Brute), `influence` an influenceRegionSetup for
+//             the same light and the options' grid, made with `view_projection` (a perspective
+//             projection from the light centre, lightViewProjectionForBounds): the light grid the
+//             lists are built with (no §4.3 refit: the hull needs the grid on the host) and its far
+//             plane must lie beyond every receiver. reserve(max samples); validate(...) checks
+//             the integrator's ranges once (GL queries, throws).
+//   input:    view samples as ranges of vec4 world positions (w == 0 = none) and vec4 normals
+//             (SampleBufferInput; normals unused: every sample is tested, light-back-facing ones
+//             included, so the result is the oracle's), or the engine's depth buffer + inverse
+//             view-projection (SampleDepthInput: positions reconstructed on the GPU; the lists'
+//             list_positions / list_ids hold the float positions the exact test used); the LUT table (LightLutGenerator's, or
+//             generateLightLut uploaded) as a BufferRange; optionally a uint per sample id naming
+//             its light-sample set (lightSampleSet per pixel; empty = set 0); a callback that
+//             draws every caster (positions through penumbraAfhCasterPosition(), attribute 0 by
+//             default) while the pipeline's light-pass program is bound.
+//   produces: per view-sample id `words = ceil(N / 32)` mask words (bit s of word id * words +
+//             s / 32: light sample s of its set blocked) in masks() or your range, and the visible
+//             fraction 1 - popcount / N as a float per id (PENUMBRA_SBS_VISIBILITY_NO_SAMPLE /
+//             _UNTESTED otherwise) in visibility() or your range; on request (readFrame(), which
+//             waits) list statistics, passes, work counters and (options.timings) per-stage GPU
+//             times; readMasks() / readVisibility().
+//   per frame: run() — (1) lists (count, scan, scatter; the influence setup's view-projection)
+//             + statistics, (2) a predicate pass: one point per list block inside an occlusion
+//             query, surviving when the longest list needs that block, (3) the light pass: for
+//             each block b < max_list_blocks under glBeginConditionalRender(query b), every caster
+//             drawn into a W x H framebuffer with no attachments; the geometry stage emits the
+//             influence region, each fragment walks its texel's list block (see
+//             light_pass.frag.glsl), (4) resolve. Nothing is read back, queried, allocated or
+//             thrown: misuse returns a Status.
+//
+// GL state: changes without restoring the current program, the draw framebuffer binding (the
+// pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
+// (off), the vertex-array binding (its own empty VAO during the predicate pass; then whatever
+// your callback binds), the uniform-buffer bindings and SSBO bindings of SbsBindings, and
+// whatever the sample-list builder and scanner bind. Your callback must leave the light pass's
+// SSBO bindings alone. Ends with GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
+#ifndef PENUMBRA_GL_PIPELINES_SAMPLE_BASED_SOFT_HPP
+#define PENUMBRA_GL_PIPELINES_SAMPLE_BASED_SOFT_HPP
+
+#include "penumbra/buffer_range.hpp"
+#include "penumbra/gl/objects.hpp"
+#include "penumbra/gl/sample_lists.hpp"
+#include "penumbra/gl/shader.hpp"
+#include "penumbra/gl/validate.hpp"
+#include "penumbra/influence_region.hpp"
+#include "penumbra/pipelines/sample_based_soft.hpp"
+
+#include <cstring>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra {
+
+/// Binding points; value-initialised = sample_based_soft_shared.h.
+struct SbsBindings {
+    uint32_t params = PENUMBRA_SBS_PARAMS_BINDING;        ///< uniform block
+    uint32_t influence = PENUMBRA_SBS_INFLUENCE_BINDING;  ///< uniform block
+    uint32_t counts = PENUMBRA_SBS_COUNTS_BINDING;        ///< SSBOs from here on (light pass)
+    uint32_t offsets = PENUMBRA_SBS_OFFSETS_BINDING;
+    uint32_t positions = PENUMBRA_SBS_POSITIONS_BINDING;
+    uint32_t ids = PENUMBRA_SBS_IDS_BINDING;
+    uint32_t masks = PENUMBRA_SBS_MASKS_BINDING;
+    uint32_t work = PENUMBRA_SBS_WORK_BINDING;
+    uint32_t lut = PENUMBRA_SBS_LUT_BINDING;
+    uint32_t samples = PENUMBRA_SBS_SAMPLES_BINDING;
+    uint32_t sets = PENUMBRA_SBS_SETS_BINDING;
+    uint32_t header = PENUMBRA_SBS_HEADER_BINDING;  ///< predicate pass
+    uint32_t slots = PENUMBRA_SBS_SLOTS_BINDING;    ///< resolve
+    uint32_t texels = PENUMBRA_SBS_TEXELS_BINDING;
+    uint32_t visibility = PENUMBRA_SBS_VISIBILITY_BINDING;
+    uint32_t resolve_offsets = PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING;
+    SampleListsBindings lists{};  ///< the sample-list builder's
+};
+
+/// Per-frame ranges of run(); empty = the executor's own buffers (sets: set 0 for every sample).
+struct SbsFrameBuffers {
+    BufferRange sets;        ///< uint[sample_count]: light-sample set per view-sample id (< K)
+    BufferRange masks;       ///< uint[sample_count * words]: output
+    BufferRange visibility;  ///< float[sample_count]: output
+};
+
+/// What readFrame() reports about the last run.
+struct SampleBasedSoftFrame {
+    SampleListStatistics statistics;
+    uint32_t passes = 0;  ///< list blocks the light pass needed (<= max_list_blocks)
+    // Work counters (count_work; overflow always).
+    uint64_t fragments = 0, pairs = 0, pairs_ignored = 0, pairs_unproven = 0, uncertain_bits = 0, exact_tests = 0,
+             planes_unproven = 0, overflow = 0;
+    /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
+    /// statistics), light pass (predicate + every list block), resolve.
+    uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
+};
+
+class SampleBasedSoftShadows {
+public:
+    using DrawCasters = std::function<void()>;
+
+    SampleBasedSoftShadows(const SampleBasedSoftGpuOptions& options, const LightSampleSets& sets, const LightLutSetup* lut,
+                           const InfluenceRegionSetup& influence, const glm::mat4& view_projection,
+                           const ShaderLibrary& library = ShaderLibrary::embedded(),
+                           const SbsBindings& bindings = {})
+        : options_(options), bindings_(bindings), builder_(library, {}, bindings.lists) {
+        validateSampleBasedSoftGpuOptions(options_);
+        PENUMBRA_CHECK(uint32_t(influence.width()) == options_.grid_width && uint32_t(influence.height()) == options_.grid_height,
+                       "penumbra::SampleBasedSoftShadows: the influence setup's grid ", influence.width(), " x ",
+                       influence.height(), " differs from the options' ", options_.grid_width, " x ", options_.grid_height);
+        n_ = sets.count();
+        k_ = sets.sets();
+        words_ = (n_ + 31) / 32;
+        if (lut) lut_ = *lut;
+        has_lut_ = lut != nullptr;
+        sets_ = sets;
+        influence_ = influence;
+        // Checks the LUT against the sets and the mode (throws).
+        (void)sampleBasedSoftParams(options_, sets_, lut, 0, 0, false);
+        const GLint fragment_blocks = gl::getInteger(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS);
+        const GLint needed = options_.count_work ? 9 : 8;
+        PENUMBRA_CHECK(fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
+                       fragment_blocks, ", the light pass needs ", needed);
+        ShaderDefines defines = influence.defines;
+        defines.push_back({"PENUMBRA_SBS_COUNT_WORK", options_.count_work ? "1" : "0"});
+        const SbsBindings& b = bindings_;
+        const std::pair<const char*, uint32_t> binding_defines[] = {
+            {"PENUMBRA_SBS_PARAMS_BINDING", b.params},       {"PENUMBRA_SBS_INFLUENCE_BINDING", b.influence},
+            {"PENUMBRA_SBS_COUNTS_BINDING", b.counts},       {"PENUMBRA_SBS_OFFSETS_BINDING", b.offsets},
+            {"PENUMBRA_SBS_POSITIONS_BINDING", b.positions}, {"PENUMBRA_SBS_IDS_BINDING", b.ids},
+            {"PENUMBRA_SBS_MASKS_BINDING", b.masks},         {"PENUMBRA_SBS_WORK_BINDING", b.work},
+            {"PENUMBRA_SBS_LUT_BINDING", b.lut},             {"PENUMBRA_SBS_SAMPLES_BINDING", b.samples},
+            {"PENUMBRA_SBS_SETS_BINDING", b.sets},           {"PENUMBRA_SBS_HEADER_BINDING", b.header},
+            {"PENUMBRA_SBS_SLOTS_BINDING", b.slots},         {"PENUMBRA_SBS_TEXELS_BINDING", b.texels},
+            {"PENUMBRA_SBS_VISIBILITY_BINDING", b.visibility}, {"PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING", b.resolve_offsets}};
+        for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
+        light_pass_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
+                                        "penumbra/sample_based_soft/light_pass.geom.glsl",
+                                        "penumbra/sample_based_soft/light_pass.frag.glsl"},
+                                       defines, library);
+        blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
+                                   defines, library);
+        resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
+        ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
+        ssbo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
+        param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(SbsParams), ubo_alignment_) * ubo_alignment_);
+        params_staging_.assign(size_t(param_stride_) * (1 + options_.max_list_blocks), 0u);
+        params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
+        const std::vector<glm::dvec4> world = sampleBasedSoftWorldSamples(sets_);
+        samples_ = gl::Buffer::fromVector(world);
+        work_ = gl::Buffer(PENUMBRA_SBS_WORK_WORDS * 4);
+        frustum_ = gl::Buffer(sizeof(SampleListsFrustum));
+        dummy_ = gl::Buffer(16);
+        framebuffer_ = gl::Framebuffer::create();
+        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
+        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
+        empty_vao_ = gl::VertexArray::create();
+        for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
+        if (options_.timings) {
+            timers_.reserve(3);
+            for (int t = 0; t < 3; ++t) timers_.emplace_back();
+        }
+        vp_ = view_projection;
+        light_.view_projection = vp_;
+        light_.light = glm::vec4(glm::vec3(influence_.frame.center), 1.0f);
+        gl::checkErrors("penumbra::SampleBasedSoftShadows");
+    }
+    SampleBasedSoftShadows(SampleBasedSoftShadows&&) noexcept = default;
+    SampleBasedSoftShadows& operator=(SampleBasedSoftShadows&&) noexcept = default;
+    SampleBasedSoftShadows(const SampleBasedSoftShadows&) = delete;
+    SampleBasedSoftShadows& operator=(const SampleBasedSoftShadows&) = delete;
+
+    const SampleBasedSoftGpuOptions& options() const { return options_; }
+    uint32_t wordsPerSample() const { return words_; }
+
+    /// Load time: lists, masks and visibility for up to `max_samples` view samples. Throws.
+    void reserve(uint32_t max_samples) {
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, max_samples);
+        builder_.reserve(s);
+        if (!counts_.id()) {
+            counts_ = gl::Buffer(s.counts_bytes);
+            offsets_ = gl::Buffer(s.offsets_bytes);
+            header_ = gl::Buffer(s.header_bytes);
+        }
+        const size_t samples = std::max<size_t>(max_samples, 1);
+        if (reserved_ != 0 && samples <= reserved_) return;
+        list_positions_ = gl::Buffer(samples * 16);
+        list_ids_ = gl::Buffer(samples * 4);
+        sample_slots_ = gl::Buffer(samples * 4);
+        sample_texels_ = gl::Buffer(samples * 4);
+        masks_ = gl::Buffer(samples * words_ * 4);
+        visibility_ = gl::Buffer(samples * 4);
+        reserved_ = static_cast<uint32_t>(samples);
+        gl::checkErrors("penumbra::SampleBasedSoftShadows::reserve");
+    }
+
+    /// Load-time checks of the integrator's ranges (GL queries; throws naming the range).
+    void validate(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
+                  const SbsFrameBuffers& frame = {}) const {
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);
+        builder_.validate(s, input, buffers(), listOptions());
+        validateFrame(sample_count, lut_table, frame);
+    }
+
+    void validate(const SampleDepthInput& input, const BufferRange& lut_table, const SbsFrameBuffers& frame = {}) const {
+        const uint32_t n = input.view.width * input.view.height;
+        const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, n);
+        builder_.validate(s, input, buffers(), listOptions());
+        validateFrame(n, lut_table, frame);
+    }
+
+    /// Every pass for buffer input (see the summary). `lut_table` may be empty in Brute mode.
+    Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
+               const DrawCasters& draw_casters, const SbsFrameBuffers& frame = {}) {
+        const Status s = begin(sample_count, lut_table, draw_casters, frame);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, draw_casters, frame);
+        return Status::Ok;
+    }
+
+    /// Every pass for depth input (positions reconstructed on the GPU from the engine's depth
+    /// buffer; sample count = view width * height, id = y * width + x). The normal texture may be 0.
+    Status run(const SampleDepthInput& input, const BufferRange& lut_table, const DrawCasters& draw_casters,
+               const SbsFrameBuffers& frame = {}) {
+        const uint64_t n = uint64_t(input.view.width) * input.view.height;
+        if (n > reserved_) return fail(Status::NotReserved);
+        const Status s = begin(static_cast<uint32_t>(n), lut_table, draw_casters, frame);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, draw_casters, frame);
+        return Status::Ok;
+    }
+
+    /// What the last run did (reads back and waits: tools, tests, benchmarks).
+    SampleBasedSoftFrame readFrame() const {
+        SampleBasedSoftFrame f;
+        f.statistics = SampleListBuilder::readStatistics(setup_, buffers());
+        f.passes = static_cast<uint32_t>(
+            std::min<uint64_t>(detail::divUp(f.statistics.max_list_length, options_.list_block), options_.max_list_blocks));
+        const std::vector<uint32_t> w = work_.download<uint32_t>(0, PENUMBRA_SBS_WORK_WORDS);
+        f.fragments = w[PENUMBRA_SBS_WORK_FRAGMENTS];
+        f.pairs = w[PENUMBRA_SBS_WORK_PAIRS];
+        f.pairs_ignored = w[PENUMBRA_SBS_WORK_PAIRS_IGNORED];
+        f.pairs_unproven = w[PENUMBRA_SBS_WORK_PAIRS_UNPROVEN];
+        f.uncertain_bits = w[PENUMBRA_SBS_WORK_UNCERTAIN_BITS];
+        f.exact_tests = w[PENUMBRA_SBS_WORK_EXACT_TESTS];
+        f.planes_unproven = w[PENUMBRA_SBS_WORK_PLANES_UNPROVEN];
+        f.overflow = w[PENUMBRA_SBS_WORK_OVERFLOW];
+        if (!timers_.empty()) {
+            f.lists_ns = timers_[0].nanoseconds();
+            f.light_pass_ns = timers_[1].nanoseconds();
+            f.resolve_ns = timers_[2].nanoseconds();
+        }
+        return f;
+    }
+    /// The executor's masks / visibility of the last run (waits): sample_count * words / sample_count.
+    std::vector<uint32_t> readMasks() const { return masks_.download<uint32_t>(0, size_t(setup_.sample_count) * words_); }
+    std::vector<float> readVisibility() const { return visibility_.download<float>(0, setup_.sample_count); }
+
+    BufferRange masks() const { return {masks_.id(), 0, masks_.size()}; }
+    BufferRange visibility() const { return {visibility_.id(), 0, visibility_.size()}; }
+    SampleListsBuffers buffers() const {
+        auto r = [](const gl::Buffer& b) { return BufferRange{b.id(), 0, b.size()}; };
+        return {r(counts_),       r(offsets_),       r(list_positions_), r(list_ids_),
+                r(sample_slots_), r(sample_texels_), r(header_),         r(frustum_)};
+    }
+    const SampleListsSetup& setup() const { return setup_; }
+    GLuint lightPassProgram() const { return light_pass_.id(); }
+    uint32_t reservedSamples() const { return reserved_; }
+    /// The light grid's view-projection (the influence setup's, which the lists use too).
+    const glm::mat4& viewProjection() const { return vp_; }
+
+private:
+    SampleBasedSoftGpuOptions options_;
+    SbsBindings bindings_;
+    SampleListBuilder builder_;
+    LightSampleSets sets_;
+    LightLutSetup lut_;
+    bool has_lut_ = false;
+    InfluenceRegionSetup influence_;
+    glm::mat4 vp_{1.0f};
+    uint32_t n_ = 0, k_ = 0, words_ = 0;
+    gl::Program light_pass_, blocks_, resolve_;
+    gl::Buffer params_, influence_params_, samples_, work_, frustum_, dummy_;
+    gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, masks_, visibility_;
+    gl::Framebuffer framebuffer_;
+    gl::VertexArray empty_vao_;
+    std::vector<gl::OcclusionQuery> block_queries_;
+    std::vector<gl::GpuTimer> timers_;  // options.timings: lists, light pass, resolve
+    std::vector<uint8_t> params_staging_;
+    uint32_t ubo_alignment_ = 256, ssbo_alignment_ = 256, param_stride_ = 512;
+    uint32_t reserved_ = 0;
+    SampleListsSetup setup_;
+    SampleListsLight light_;
+
+    void validateFrame(uint32_t sample_count, const BufferRange& lut_table, const SbsFrameBuffers& frame) const {
+        const char* f = "SampleBasedSoftShadows::validate";
+        if (options_.mode != SoftMode::Brute) gl::validateRange(lut_table, lut_.tableBytes(), "lut table", f, ssbo_alignment_);
+        if (!frame.sets.empty()) gl::validateRange(frame.sets, uint64_t(sample_count) * 4, "sets", f, ssbo_alignment_);
+        if (!frame.masks.empty())
+            gl::validateRange(frame.masks, uint64_t(sample_count) * words_ * 4, "masks", f, ssbo_alignment_);
+        if (!frame.visibility.empty())
+            gl::validateRange(frame.visibility, uint64_t(sample_count) * 4, "visibility", f, ssbo_alignment_);
+    }
+
+    Status begin(uint32_t sample_count, const BufferRange& lut_table, const DrawCasters& draw_casters,
+                 const SbsFrameBuffers& frame) {
+        if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
+        if (!draw_casters) return fail(Status::InvalidArgument);
+        if (options_.mode != SoftMode::Brute && !lut_table.holds(lut_.tableBytes())) return fail(Status::RangeTooSmall);
+        if (!frame.sets.empty() && !frame.sets.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
+        if (!frame.masks.empty() && !frame.masks.holds(uint64_t(sample_count) * words_ * 4)) return fail(Status::RangeTooSmall);
+        if (!frame.visibility.empty() && !frame.visibility.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
+        for (const BufferRange* r : {&lut_table, &frame.sets, &frame.masks, &frame.visibility})
+            if (!r->empty() && r->offset % ssbo_alignment_ != 0) return fail(Status::Misaligned);
+        setup_ = sampleListsSetup(options_.grid_width, options_.grid_height, sample_count);  // <= reserved: no throw
+        return Status::Ok;
+    }
+
+    static Status fail(Status s) {
+        PENUMBRA_ASSERT(s == Status::Ok && "penumbra::SampleBasedSoftShadows: per-frame misuse (see the returned Status)");
+        return s;
+    }
+
+    SampleListsOptions listOptions() const {
+        SampleListsOptions o;
+        o.cull_back_facing = false;  // every sample tested: a soft light may reach past the centre's terminator
+        o.depth_range = LightDepthRange::Unclipped;
+        return o;
+    }
+    SampleListsBuild listBuild() const {
+        SampleListsBuild b;
+        b.fit_frustum = false;  // the influence regions are built on the host's grid
+        b.statistics = true;    // the predicate pass reads max_list_length
+        return b;
+    }
+
+    void bindParams(uint32_t slot) const {
+        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.params, params_.id(), static_cast<GLintptr>(size_t(slot) * param_stride_),
+                          sizeof(SbsParams));
+    }
+
+    void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
+        const bool has_sets = !frame.sets.empty();
+        const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
+        for (uint32_t b = 0; b <= options_.max_list_blocks; ++b) {
+            // Validated at construction: cannot throw.
+            const SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, b == 0 ? 0u : b - 1, has_sets);
+            std::memcpy(params_staging_.data() + size_t(b) * param_stride_, &p, sizeof p);
+        }
+        glNamedBufferSubData(params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
+        const uint32_t zero = 0;
+        const BufferRange masks = frame.masks.empty() ? this->masks() : frame.masks;
+        const uint64_t mask_bytes = uint64_t(std::max<uint32_t>(setup_.sample_count, 1)) * words_ * 4;
+        glClearNamedBufferSubData(masks.buffer, GL_R32UI, static_cast<GLintptr>(masks.offset),
+                                  static_cast<GLsizeiptr>(std::min<uint64_t>(mask_bytes, masks.size)), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(work_.id(), GL_R32UI, 0, PENUMBRA_SBS_WORK_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
+        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_RASTERIZER_DISCARD);
+        if (!timers_.empty()) timers_[1].begin();
+        // (2) Which list blocks does the longest list need? One point per block, on the GPU.
+        blocks_.use();
+        glBindVertexArray(empty_vao_.id());
+        bindParams(0);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, header_.id(), 0, sizeof(SampleListsHeader));
+        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            glBeginQuery(GL_ANY_SAMPLES_PASSED, block_queries_[b].id());
+            glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
+            glEndQuery(GL_ANY_SAMPLES_PASSED);
+        }
+        // (3) Light pass, block by block; blocks no list needs are skipped by the GPU.
+        light_pass_.use();
+        glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, counts_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, list_positions_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, list_ids_.id());
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        if (lut_table.empty()) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.lut, dummy_.id());
+        } else {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.lut, lut_table);
+        }
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
+        if (has_sets) {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
+        } else {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
+        }
+        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+            bindParams(1 + b);
+            light_pass_.use();
+            draw_casters();
+            glEndConditionalRender();
+        }
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        if (!timers_.empty()) timers_[1].end();
+        // (4) Resolve.
+        if (!timers_.empty()) timers_[2].begin();
+        resolve_.use();
+        bindParams(0);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, sample_slots_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, sample_texels_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.resolve_offsets, offsets_.id());
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        if (frame.visibility.empty()) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.visibility, visibility_.id());
+        } else {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.visibility, frame.visibility);
+        }
+        const detail::DispatchGrid grid = detail::foldDispatch(detail::divUp(setup_.sample_count, 256));
+        if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
+        if (!timers_.empty()) timers_[2].end();
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+};
+
+}  // namespace penumbra
+
+#endif

@@ -1,0 +1,232 @@
+// penumbra — sample-based soft shadows, light pass, fragment stage (sintorn2008 §4, Fig. 6). One
+// fragment per (caster triangle, light texel its influence region covers): walk one block of the
+// texel's list of view samples; per view sample p the light samples the triangle T blocks are
+// those behind T's three edge planes through p and beyond T's supporting plane. GLSL twin of the
+// per-pair work of penumbra::sampleBasedSoftCpu (include/penumbra/pipelines/sample_based_soft.hpp),
+// step for step:
+//   - the planes are built in fp64 from the float inputs (the twin's arithmetic, `precise`),
+//     oriented by det = (v0 - p) . ((v1 - p) x (v2 - p)), mapped to the light's normalised space
+//     (penumbraSbsPlaneToLocal: LightFrame::planeToLocal with the frame from the parameter block),
+//     then rounded to float for the LUT lookup (penumbra/light_lut/lookup.glsl);
+//   - Lut: the AND of the four centre masks (penumbraLutBehind), OR-ed into the sample's mask;
+//   - Exact: certified lookups combined with penumbraLutCombine; a plane whose rounding bound
+//     exceeds the budget (params.bounds.z, a quarter of the LUT's tolerance by default: the float
+//     rounding of the plane takes another quarter) is all-uncertain; pairs within the oracle's
+//     coplanar/tie reach or with an unprovable det are decided sample by sample. Every uncertain
+//     light sample is decided by the hard pipeline's exact fp64 test (penumbra/alias_free_hard/
+//     blocker_test.glsl, penumbraAfhBlocks with that sample as the point light: the oracle's
+//     verdict on every pair it does not call a tie, coplanar rule with the oracle's epsilon);
+//   - Brute: every light sample by that exact test.
+// Result: atomicOr into masks[id * words + s / 32] (bit s % 32: light sample s of the view
+// sample's set blocked). No colour output; bind a W x H framebuffer with no attachments.
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
+#include "penumbra/sample_lists/sample_lists_shared.h"
+#include "penumbra/sample_based_soft/sample_based_soft_shared.h"
+
+#ifndef PENUMBRA_SBS_COUNT_WORK
+#define PENUMBRA_SBS_COUNT_WORK 1
+#endif
+
+layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
+    PenumbraSbsParams penumbraSbsParams;
+};
+layout(std430, binding = PENUMBRA_SBS_COUNTS_BINDING) readonly buffer PenumbraSbsCounts { uint penumbraSbsCounts[]; };
+layout(std430, binding = PENUMBRA_SBS_OFFSETS_BINDING) readonly buffer PenumbraSbsOffsets { uint penumbraSbsOffsets[]; };
+layout(std430, binding = PENUMBRA_SBS_POSITIONS_BINDING) readonly buffer PenumbraSbsPositions { vec4 penumbraSbsPositions[]; };
+layout(std430, binding = PENUMBRA_SBS_IDS_BINDING) readonly buffer PenumbraSbsIds { uint penumbraSbsIds[]; };
+layout(std430, binding = PENUMBRA_SBS_MASKS_BINDING) buffer PenumbraSbsMasks { uint penumbraSbsMasks[]; };
+layout(std430, binding = PENUMBRA_SBS_LUT_BINDING) readonly buffer PenumbraSbsLut { uvec4 penumbraSbsLut[]; };
+layout(std430, binding = PENUMBRA_SBS_SAMPLES_BINDING) readonly buffer PenumbraSbsSamples { dvec4 penumbraSbsSamples[]; };
+layout(std430, binding = PENUMBRA_SBS_SETS_BINDING) readonly buffer PenumbraSbsSets { uint penumbraSbsSets[]; };
+#if PENUMBRA_SBS_COUNT_WORK
+layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
+#endif
+
+#define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraSbsCounts[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_OFFSET(list) penumbraSbsOffsets[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_POSITION(slot) penumbraSbsPositions[slot]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_ID(slot) penumbraSbsIds[slot]
+#define PENUMBRA_SAMPLE_LISTS_GRID_WIDTH penumbraSbsParams.grid.x
+#include "penumbra/sample_lists/sample_lists.glsl"
+
+#define PENUMBRA_LUT_PARAMS penumbraSbsParams.lut
+#define PENUMBRA_LUT_LOAD(index) penumbraSbsLut[index]
+// The local samples are not bound: the pipeline decides uncertain bits with the exact segment
+// test on the world samples, never with penumbraLutResolve / penumbraExactBehind.
+#define PENUMBRA_LUT_SAMPLE(table, bit) vec3(0.0)
+#include "penumbra/light_lut/lookup.glsl"
+
+#define PENUMBRA_AFH_EXACT 1
+#include "penumbra/alias_free_hard/blocker_test.glsl"
+
+layout(location = 0) flat in vec3 penumbraSbsVertex0;
+layout(location = 1) flat in vec3 penumbraSbsVertex1;
+layout(location = 2) flat in vec3 penumbraSbsVertex2;
+
+const double kPenumbraSbsEpsilon = 1.1102230246251565404e-16LF;  // 2^-53
+
+double penumbraSbsMaxAbs(dvec3 v) {
+    const dvec3 m = abs(v);
+    return max(m.x, max(m.y, m.z));
+}
+double penumbraSbsDot(dvec3 a, dvec3 b) {
+    precise double r = (a.x * b.x + a.y * b.y) + a.z * b.z;
+    return r;
+}
+dvec3 penumbraSbsCross(dvec3 a, dvec3 b) {
+    precise dvec3 r = dvec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+    return r;
+}
+double penumbraSbsLength(dvec3 a) { return sqrt(penumbraSbsDot(a, a)); }
+
+// LightFrame::planeToLocal: world plane dot(n, x) + w = 0 -> unit local normal and offset (the
+// signed distance of the light centre in normalised units). Zero normal -> 0 (nothing behind).
+dvec4 penumbraSbsPlaneToLocal(dvec4 plane) {
+    const dvec3 n = plane.xyz;
+    const double m = penumbraSbsMaxAbs(n);
+    if (!(m > 0.0LF)) return dvec4(0.0LF);
+    precise dvec3 nm = n / m;
+    precise double w = plane.w / m;
+    const PenumbraSbsParams P = penumbraSbsParams;
+    precise dvec3 local_n = dvec3(P.scale.x * penumbraSbsDot(P.rotation[0].xyz, nm), P.scale.y * penumbraSbsDot(P.rotation[1].xyz, nm),
+                                  P.scale.z * penumbraSbsDot(P.rotation[2].xyz, nm));
+    precise double local_w = penumbraSbsDot(nm, P.center.xyz) + w;
+    precise double len = penumbraSbsLength(local_n);
+    return dvec4(local_n / len, local_w / len);
+}
+
+// detail::soft::localPlane: the plane through `origin` spanned by a and b, flipped by `flip`, in
+// the light's normalised space (rounded to float for the lookup), and whether its rounding bound
+// (float inputs, fp64 arithmetic, the change of frame; normalised units) fits the budget.
+struct PenumbraSbsPlane {
+    vec4 plane;
+    bool proven;
+};
+PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip) {
+    const PenumbraSbsParams P = penumbraSbsParams;
+    PenumbraSbsPlane result = PenumbraSbsPlane(vec4(0.0), false);
+    dvec3 n = penumbraSbsCross(a, b);
+    const double length = penumbraSbsLength(n);
+    if (!(length > 0.0LF) || !(length < 1e300LF)) return result;
+    if (flip) n = -n;
+    precise double w = -penumbraSbsDot(n, origin);
+    precise double dn = 8.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b);
+    precise double error = (dn + 4.0LF * kPenumbraSbsEpsilon * length) * (P.bounds.y + penumbraSbsLength(origin)) / length /
+                           P.scale.w + 16.0LF * kPenumbraSbsEpsilon;
+    result.plane = vec4(penumbraSbsPlaneToLocal(dvec4(n, w)));
+    result.proven = error <= P.bounds.z;
+    return result;
+}
+
+// The exact verdict for light sample `index` (of the whole K * N array): the hard pipeline's
+// fp64 segment test with the sample as the point light.
+bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
+    const dvec3 l = penumbraSbsSamples[index].xyz;
+    return penumbraAfhBlocks(v0, v1, v2, p, l, penumbraSbsParams.epsilon.x, 0.0LF);
+}
+
+void main() {
+    const PenumbraSbsParams P = penumbraSbsParams;
+    const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), P.grid.w, P.grid.z);
+    const dvec3 v0 = dvec3(penumbraSbsVertex0), v1 = dvec3(penumbraSbsVertex1), v2 = dvec3(penumbraSbsVertex2);
+    const uint mode = P.config.x, n = P.config.y, words = P.config.w, tables = P.counts.z;
+    const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
+    uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
+    for (uint slot = range.x; slot < range.x + range.y; ++slot) {
+        const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
+        const uint id = penumbraSampleListsId(slot);
+        uint set = P.counts.w != 0u ? penumbraSbsSets[id] : 0u;
+        if (set >= P.config.z) set = 0u;  // out of range: set 0 (the CPU twin rejects it)
+        const uint mask_base = id * words, sample_base = set * n;
+        ++pairs;
+        bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
+        PenumbraSbsPlane planes[4];
+        if (!all_exact) {
+            // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
+            const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
+            const double centre_reach = penumbraSbsMaxAbs(P.center.xyz - p);
+            const double s_min = max(0.0LF, centre_reach - P.bounds.x), s_max = centre_reach + P.bounds.x;
+            const double scale_lo = max(scale_v, s_min), scale_hi = max(scale_v, s_max);
+            const double distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
+            precise double ignore = P.epsilon.x * scale_lo;
+            if (distance2 < ignore * ignore * (1.0LF - 1e-9LF)) {  // the oracle ignores T for every sample
+                ++ignored;
+                continue;
+            }
+            precise double reach = 2.0LF * P.epsilon.z * scale_hi;
+            all_exact = exact && (distance2 <= reach * reach * (1.0LF + 1e-9LF) || !(P.bounds.w > reach));
+            const dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
+            const double det = penumbraSbsDot(a, penumbraSbsCross(b, c));
+            precise double det_bound = 16.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b) * penumbraSbsLength(c);
+            if (exact && !(abs(det) > det_bound)) all_exact = true;
+            const bool positive = det > 0.0LF;
+            planes[0] = penumbraSbsLocalPlane(p, a, b, positive);
+            planes[1] = penumbraSbsLocalPlane(p, b, c, positive);
+            planes[2] = penumbraSbsLocalPlane(p, c, a, positive);
+            planes[3] = penumbraSbsLocalPlane(v0, v1 - v0, v2 - v0, positive);  // T's plane: p in front
+            if (all_exact) {
+                ++unproven_pairs;
+                uncertain_bits += n;
+            }
+        }
+        if (all_exact) {
+            for (uint w = 0u; w < words; ++w) {
+                uint m = 0u;
+                for (uint bit = 0u; bit < 32u && 32u * w + bit < n; ++bit) {
+                    ++tests;
+                    if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + 32u * w + bit)) m |= 1u << bit;
+                }
+                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + w], m);
+            }
+            continue;
+        }
+        for (uint block = 0u; block < tables; ++block) {
+            const uint table = set * tables + block;
+            if (mode == PENUMBRA_SBS_MODE_LUT) {
+                uvec4 m = uvec4(0xFFFFFFFFu);
+                for (int i = 0; i < 4; ++i) m &= penumbraLutBehind(planes[i].plane, table);
+                for (uint w = 0u; w < 4u && block * 4u + w < words; ++w)
+                    if (m[w] != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m[w]);
+                continue;
+            }
+            const uvec4 valid = penumbraLutValidMask(P.lut, table);
+            uvec4 certain = uvec4(0u), uncertain = uvec4(0u);
+            for (int i = 0; i < 4; ++i) {
+                uvec4 c_i = uvec4(0u), u_i = valid;
+                if (planes[i].proven) {
+                    c_i = penumbraLutBehindCertified(planes[i].plane, table, u_i);
+                } else {
+                    ++unproven_planes;
+                }
+                if (i == 0) {
+                    certain = c_i;
+                    uncertain = u_i;
+                } else {
+                    penumbraLutCombine(certain, uncertain, c_i, u_i);
+                }
+            }
+            for (uint w = 0u; w < 4u && block * 4u + w < words; ++w) {
+                uint m = certain[w];
+                uint bits = uncertain[w] & valid[w];
+                uncertain_bits += uint(bitCount(bits));
+                while (bits != 0u) {
+                    const uint bit = uint(findLSB(bits));
+                    bits &= bits - 1u;
+                    ++tests;
+                    if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + block * 128u + 32u * w + bit)) m |= 1u << bit;
+                }
+                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m);
+            }
+        }
+    }
+#if PENUMBRA_SBS_COUNT_WORK
+    atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
+    if (pairs != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS], pairs);
+    if (ignored != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_IGNORED], ignored);
+    if (unproven_pairs != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_UNPROVEN], unproven_pairs);
+    if (uncertain_bits != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_UNCERTAIN_BITS], uncertain_bits);
+    if (tests != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_EXACT_TESTS], tests);
+    if (unproven_planes != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PLANES_UNPROVEN], unproven_planes);
+#endif
+}

@@ -1,0 +1,46 @@
+// penumbra — sample-based soft shadows, light pass, geometry stage (sintorn2008 §4.1, Fig. 5):
+// each caster triangle's influence region (penumbra/influence_region/influence_region.glsl, the
+// block-4 snippet: convex hull of the 3k far points, optional supporting-plane cut, corner-rule
+// dilation, whole-grid fallbacks) emitted as a strip into the W x H grid viewport; the triangle's
+// world vertices travel flat to the fragment stage. Degenerate triangles (the one rule,
+// penumbra/alias_free_hard/degenerate.glsl) cast nothing and are culled here.
+// Defines: the influence setup's (PENUMBRA_INFLUENCE_SIDES, PENUMBRA_INFLUENCE_CUT).
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1
+#include "penumbra/influence_region/influence_region_shared.h"
+#include "penumbra/sample_based_soft/sample_based_soft_shared.h"
+#include "penumbra/alias_free_hard/degenerate.glsl"
+
+#ifndef PENUMBRA_INFLUENCE_SIDES
+#define PENUMBRA_INFLUENCE_SIDES PENUMBRA_INFLUENCE_DEFAULT_SIDES
+#endif
+
+layout(triangles) in;
+layout(triangle_strip, max_vertices = PENUMBRA_INFLUENCE_MAX_VERTICES(PENUMBRA_INFLUENCE_SIDES)) out;
+
+layout(std140, binding = PENUMBRA_SBS_INFLUENCE_BINDING) uniform PenumbraSbsInfluenceBlock {
+    PenumbraInfluenceParams penumbraSbsInfluence;
+};
+
+#include "penumbra/influence_region/influence_region.glsl"
+
+layout(location = 0) flat out vec3 penumbraSbsVertex0;
+layout(location = 1) flat out vec3 penumbraSbsVertex1;
+layout(location = 2) flat out vec3 penumbraSbsVertex2;
+
+void main() {
+    const vec3 v0 = gl_in[0].gl_Position.xyz, v1 = gl_in[1].gl_Position.xyz, v2 = gl_in[2].gl_Position.xyz;
+    if (penumbraAfhDegenerate(dvec3(v0), dvec3(v1), dvec3(v2))) return;
+    const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
+    const vec2 half_grid = 0.5 * penumbraSbsInfluence.grid.xy;
+    // The convex polygon as a zig-zag strip: 0, 1, n-1, 2, n-2, ... (as influence_region.geom.glsl).
+    for (int j = 0; j < count; ++j) {
+        const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
+        gl_Position = vec4(penumbraInfluenceOut[index] / half_grid - 1.0, 0.0, 1.0);
+        penumbraSbsVertex0 = v0;
+        penumbraSbsVertex1 = v1;
+        penumbraSbsVertex2 = v2;
+        EmitVertex();
+    }
+    EndPrimitive();
+}

@@ -1,0 +1,109 @@
+// penumbra — constants and the parameter block shared by the sample-based soft-shadow pipeline's
+// host code (include/penumbra/pipelines/sample_based_soft.hpp, gl/pipelines/sample_based_soft.hpp)
+// and its shaders (light_pass.*, blocks.frag.glsl, resolve.comp.glsl). Valid GLSL and C++.
+#ifndef PENUMBRA_SAMPLE_BASED_SOFT_SHARED_H
+#define PENUMBRA_SAMPLE_BASED_SOFT_SHARED_H
+
+// Bindings: the defaults of penumbra::SbsBindings, injected as defines (each overridable). The
+// influence region's parameter block is a uniform block at PENUMBRA_SBS_INFLUENCE_BINDING.
+#ifndef PENUMBRA_SBS_PARAMS_BINDING
+#define PENUMBRA_SBS_PARAMS_BINDING 1     // uniform block: PenumbraSbsParams (one slot per list block)
+#endif
+#ifndef PENUMBRA_SBS_INFLUENCE_BINDING
+#define PENUMBRA_SBS_INFLUENCE_BINDING 2  // uniform block: PenumbraInfluenceParams
+#endif
+#ifndef PENUMBRA_SBS_COUNTS_BINDING
+#define PENUMBRA_SBS_COUNTS_BINDING 0     // SSBOs from here on
+#endif
+#ifndef PENUMBRA_SBS_OFFSETS_BINDING
+#define PENUMBRA_SBS_OFFSETS_BINDING 1
+#endif
+#ifndef PENUMBRA_SBS_POSITIONS_BINDING
+#define PENUMBRA_SBS_POSITIONS_BINDING 2
+#endif
+#ifndef PENUMBRA_SBS_IDS_BINDING
+#define PENUMBRA_SBS_IDS_BINDING 3
+#endif
+#ifndef PENUMBRA_SBS_MASKS_BINDING
+#define PENUMBRA_SBS_MASKS_BINDING 4      // uint[sample_count * words]: blocked light samples
+#endif
+#ifndef PENUMBRA_SBS_WORK_BINDING
+#define PENUMBRA_SBS_WORK_BINDING 5       // work counters
+#endif
+#ifndef PENUMBRA_SBS_LUT_BINDING
+#define PENUMBRA_SBS_LUT_BINDING 6        // uvec4[]: the LUT (LightLutGenerator's table)
+#endif
+#ifndef PENUMBRA_SBS_SAMPLES_BINDING
+#define PENUMBRA_SBS_SAMPLES_BINDING 7    // dvec4[K * N]: world light samples (xyz), set-major
+#endif
+#ifndef PENUMBRA_SBS_SETS_BINDING
+#define PENUMBRA_SBS_SETS_BINDING 8       // uint[sample_count]: light-sample set per view-sample id
+#endif
+#ifndef PENUMBRA_SBS_HEADER_BINDING
+#define PENUMBRA_SBS_HEADER_BINDING 5     // the lists' header (block predicate pass only)
+#endif
+// Resolve.
+#ifndef PENUMBRA_SBS_SLOTS_BINDING
+#define PENUMBRA_SBS_SLOTS_BINDING 0
+#endif
+#ifndef PENUMBRA_SBS_TEXELS_BINDING
+#define PENUMBRA_SBS_TEXELS_BINDING 1
+#endif
+#ifndef PENUMBRA_SBS_VISIBILITY_BINDING
+#define PENUMBRA_SBS_VISIBILITY_BINDING 2  // float[sample_count]: visible fraction (resolve output)
+#endif
+// The resolve also reads offsets (PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING) and masks, and counts into work.
+#ifndef PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING
+#define PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING 3
+#endif
+
+// Modes (params.config.x): penumbra::SoftMode.
+#define PENUMBRA_SBS_MODE_EXACT 0u
+#define PENUMBRA_SBS_MODE_LUT 1u
+#define PENUMBRA_SBS_MODE_BRUTE 2u
+
+// Visibility values the resolve writes for samples it could not evaluate (visible fraction
+// otherwise, in [0, 1]).
+#define PENUMBRA_SBS_VISIBILITY_NO_SAMPLE (-1.0)  // background (position w == 0)
+#define PENUMBRA_SBS_VISIBILITY_UNTESTED (-2.0)   // outside the light frustum, non-finite, or past
+                                                  // the list blocks walked (max_list_blocks)
+
+// Work counters (words of the work buffer).
+#define PENUMBRA_SBS_WORK_FRAGMENTS 0
+#define PENUMBRA_SBS_WORK_PAIRS 1            // (view sample, caster) pairs evaluated
+#define PENUMBRA_SBS_WORK_PAIRS_IGNORED 2    // coplanar rule for every light sample
+#define PENUMBRA_SBS_WORK_PAIRS_UNPROVEN 3   // exact: every bit decided by the exact test
+#define PENUMBRA_SBS_WORK_UNCERTAIN_BITS 4   // exact: pair bits the LUT did not vouch for
+#define PENUMBRA_SBS_WORK_EXACT_TESTS 5      // per-(view sample, light sample) exact tests
+#define PENUMBRA_SBS_WORK_OVERFLOW 6         // samples left untested past the last list block (resolve)
+#define PENUMBRA_SBS_WORK_PLANES_UNPROVEN 7  // exact: planes whose rounding bound exceeded the budget
+#define PENUMBRA_SBS_WORK_WORDS 8
+
+#ifdef __cplusplus
+namespace penumbra::shared {  // C++: include penumbra/light_lut.hpp first (PenumbraLutParams)
+#else
+#include "penumbra/light_lut/light_lut_shared.h"
+#endif
+
+// std140 == std430: the dvec4 members first (32-aligned), then uvec4s, then the LUT's block.
+// 7 dvec4 (224) + 4 uvec4 (64) + PenumbraLutParams (48) = 336 bytes.
+struct PenumbraSbsParams {
+    dvec4 center;       // xyz: LightFrame::center (world), w: 0
+    dvec4 rotation[3];  // LightFrame::rotation columns (local x, y, z), w: 0
+    dvec4 scale;        // xyz: LightFrame::scale, w: the smallest semi-axis
+    dvec4 bounds;       // x: light reach (max semi-axis * sqrt 3), y: |centre| + reach, z: plane budget
+                        // (normalised units), w: the LUT's margin in world units (budget * min scale)
+    dvec4 epsilon;      // x: coplanar epsilon, y: tie epsilon, z: max of both, w: 0
+    uvec4 grid;         // x = W, y = H, z = list block (samples per fragment per pass), w = block index
+    uvec4 config;       // x = mode, y = N (samples per set), z = K (sets), w = words per view sample
+    uvec4 counts;       // x = sample count, y = samples per list walked (max_list_blocks * list block),
+                        // z = tables per set, w = 1 when a per-sample set buffer is bound
+    uvec4 reserved;
+    PenumbraLutParams lut;
+};
+
+#ifdef __cplusplus
+}  // namespace penumbra::shared
+#endif
+
+#endif

@@ -1,0 +1,534 @@
+// The GPU sample-based soft-shadow pipeline (penumbra/gl/pipelines/sample_based_soft.hpp) against
+// the oracle and its CPU twin (penumbra/pipelines/sample_based_soft.hpp), on the built-in scenes:
+// receivers are points on the surfaces (as view samples are), the light samples the same world
+// samples the oracle tests. Exact and Brute: 0 mismatched non-tie bits vs
+// reference::VisibilityOracle::evaluate (any conformant fp64 driver). Lut: its mismatch fraction
+// vs the oracle is reported, and its bits are compared with the CPU twin's Lut mode: the GPU looks
+// the fp64 planes up after rounding them to float, the twin in double, so bits may differ where a
+// plane lies within float rounding of a LUT cell border (tolerance: 1e-3 of the bits).
+#include "support/alloc_counter.hpp"
+#include "support/gl_audit.hpp"
+
+#include <penumbra/gl/objects.hpp>
+#include <penumbra/gl/pipelines/sample_based_soft.hpp>
+#include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/scene/gl_scene.hpp>
+#include <penumbra/scene/scene.hpp>
+
+#include "support/gl_test_support.hpp"
+#include "support/test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+#include <vector>
+
+using glm::dvec3;
+using penumbra::Status;
+
+namespace {
+
+std::vector<glm::vec3> surfacePoints(const penumbra::scene::Mesh& mesh, size_t count, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<size_t> pick(0, mesh.triangleCount() - 1);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::vector<glm::vec3> points;
+    while (points.size() < count) {
+        const size_t t = pick(rng);
+        const glm::vec3 a = mesh.positions[mesh.indices[3 * t]], b = mesh.positions[mesh.indices[3 * t + 1]],
+                        c = mesh.positions[mesh.indices[3 * t + 2]];
+        float u = unit(rng), v = unit(rng);
+        if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+        points.push_back(a + u * (b - a) + v * (c - a));
+    }
+    return points;
+}
+
+/// Casters as a VAO (attribute 0 = vec3 position) + index buffer.
+struct GpuMesh {
+    penumbra::gl::Buffer vbo, ibo;
+    penumbra::gl::VertexArray vao;
+    GLsizei index_count = 0;
+    explicit GpuMesh(const penumbra::scene::Mesh& mesh)
+        : vbo(penumbra::gl::Buffer::fromVector(mesh.positions)), ibo(penumbra::gl::Buffer::fromVector(mesh.indices)),
+          vao(penumbra::gl::VertexArray::create()), index_count(static_cast<GLsizei>(mesh.indices.size())) {
+        glVertexArrayVertexBuffer(vao.id(), 0, vbo.id(), 0, sizeof(glm::vec3));
+        glVertexArrayAttribFormat(vao.id(), 0, 3, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao.id(), 0, 0);
+        glEnableVertexArrayAttrib(vao.id(), 0);
+        glVertexArrayElementBuffer(vao.id(), ibo.id());
+    }
+    void draw() const {
+        glBindVertexArray(vao.id());
+        glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+    }
+};
+
+struct Tally {
+    uint64_t bits = 0, ties = 0, mismatched = 0, untested = 0;
+};
+
+bool bitOf(const std::vector<uint32_t>& masks, uint32_t words, size_t r, uint32_t s) {
+    return (masks[r * words + s / 32] >> (s % 32)) & 1u;
+}
+
+Tally compareOracle(const std::vector<uint32_t>& masks, uint32_t words, const std::vector<float>& visibility,
+                    const penumbra::reference::VisibilityResult& oracle) {
+    Tally t;
+    for (size_t r = 0; r < oracle.receivers; ++r) {
+        if (visibility[r] < 0.0f) {
+            ++t.untested;
+            continue;
+        }
+        for (uint32_t s = 0; s < oracle.samples; ++s) {
+            ++t.bits;
+            if (oracle.isTie(r, s)) {
+                ++t.ties;
+                continue;
+            }
+            t.mismatched += bitOf(masks, words, r, s) != oracle.isBlocked(r, s);
+        }
+    }
+    return t;
+}
+
+struct Case {
+    std::string name;
+    penumbra::scene::Scene scene;
+};
+
+}  // namespace
+
+namespace {
+
+/// Every mode on every case: N = 128, and 1024 on the torus knot (on every case when `all_1024`).
+void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all_1024) {
+    penumbra::test::context();
+    const uint32_t seed = penumbra::test::testSeed();
+    for (const Case& c : cases) {
+        std::vector<uint32_t> counts = {128u};
+        if (all_1024 || c.name == "torus_knot") counts.push_back(1024u);
+        for (const uint32_t n : counts) {
+            INFO(c.name << " N=" << n);
+            const penumbra::scene::Mesh mesh = c.scene.merged();
+            penumbra::Light light;
+            light.center = dvec3(c.scene.light.position);
+            light.size = dvec3(double(c.scene.light.radius));
+            penumbra::LightSampleOptions sample_options;
+            sample_options.count = n;
+            sample_options.sets = 2;
+            sample_options.seed = 11;
+            const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+            penumbra::LightLutOptions lut_options;
+            lut_options.resolution = 64;
+            lut_options.certified = true;
+            const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
+            const std::vector<uint32_t> lut_words = penumbra::generateLightLut(lut);
+            const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(lut_words);
+            const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+
+            // Receivers on the surfaces; half of them use set 1 (the per-pixel set choice).
+            const std::vector<glm::vec3> points = surfacePoints(mesh, receiver_count, seed + n);
+            std::vector<uint32_t> receiver_sets(points.size());
+            for (size_t r = 0; r < points.size(); ++r) receiver_sets[r] = uint32_t(r & 1u);
+            std::vector<glm::vec4> positions4;
+            for (const auto& p : points) positions4.emplace_back(p, 1.0f);
+            const penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(positions4);
+            const penumbra::gl::Buffer sets_buffer = penumbra::gl::Buffer::fromVector(receiver_sets);
+            const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
+
+            // The light grid from the light centre over the scene; far plane beyond every receiver.
+            // (The receivers' box: the casters need not lie inside the grid's frustum.)
+            glm::vec3 lo(1e30f), hi(-1e30f);
+            for (const auto& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+            const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(c.scene.light.position, 1.0f), lo, hi);
+            double far_depth = 0.0;
+            for (const auto& p : points) far_depth = std::max(far_depth, double((vp * glm::vec4(p, 1.0f)).w));
+            penumbra::InfluenceRegionOptions io;
+            io.grid_width = io.grid_height = 64;
+            io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+            const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+
+            // The oracle on the same float receivers and the same world samples (per set).
+            std::vector<dvec3> mesh_d(mesh.positions.begin(), mesh.positions.end());
+            const penumbra::reference::VisibilityOracle oracle(mesh_d, mesh.indices);
+            penumbra::reference::VisibilityOptions oracle_options;
+            // The oracle's defaults (tie and coplanar 1e-9), on both sides. (With the hard pipeline's
+            // 1e-7 the oracle's coplanar reach exceeds the LUT's margin at tolerance 1e-6: every pair
+            // is then decided sample by sample; still exact, as fast as brute.)
+            std::vector<dvec3> receivers_by_set[2];
+            for (size_t r = 0; r < points.size(); ++r) receivers_by_set[r & 1].push_back(dvec3(points[r]));
+            penumbra::reference::VisibilityResult truth_by_set[2];
+            for (uint32_t s = 0; s < 2; ++s)
+                truth_by_set[s] = oracle.evaluate(receivers_by_set[s], std::vector<dvec3>(sets.worldSet(s), sets.worldSet(s) + n),
+                                                  oracle_options);
+            const uint32_t words = (n + 31) / 32;
+
+            // CPU twin (Lut) for the bit comparison.
+            penumbra::SampleBasedSoftOptions twin_options;
+            twin_options.mode = penumbra::SoftMode::Lut;
+            twin_options.oracle = oracle_options;
+            const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(),
+                                                mesh.triangleCount()};
+            const penumbra::SoftReceivers receivers{points.data(), points.size(), receiver_sets.data()};
+            const penumbra::SampleBasedSoftCpuResult twin_lut =
+                penumbra::sampleBasedSoftCpu(sets, &lut, lut_words.data(), casters, receivers, twin_options);
+
+            const GpuMesh gpu_mesh(mesh);
+            for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Lut, penumbra::SoftMode::Brute}) {
+                if (mode == penumbra::SoftMode::Brute && n > 128) continue;
+                INFO("mode " << std::string(penumbra::softModeName(mode)));
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 64;
+                options.oracle = oracle_options;
+                penumbra::SampleBasedSoftShadows pipeline(options, sets, mode == penumbra::SoftMode::Brute ? nullptr : &lut,
+                                                          influence, vp);
+                pipeline.reserve(uint32_t(points.size()));
+                const penumbra::SbsFrameBuffers frame{{sets_buffer.id(), 0, sets_buffer.size()}, {}, {}};
+                pipeline.validate(input, uint32_t(points.size()), lut_table, frame);
+                REQUIRE(pipeline.run(input, uint32_t(points.size()), mode == penumbra::SoftMode::Brute ? penumbra::BufferRange{} : lut_table,
+                                     [&] { gpu_mesh.draw(); }, frame) == Status::Ok);
+                const std::vector<uint32_t> masks = pipeline.readMasks();
+                const std::vector<float> visibility = pipeline.readVisibility();
+                const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+                penumbra::gl::checkErrors("sample_based_soft_gl_test");
+                // Per set: the oracle's receivers are the GPU's ids r with r & 1 == set.
+                Tally total;
+                uint64_t blocked = 0, visibility_errors = 0;
+                for (uint32_t s = 0; s < 2; ++s) {
+                    std::vector<uint32_t> sub_masks;
+                    std::vector<float> sub_visibility;
+                    for (size_t r = s; r < points.size(); r += 2) {
+                        sub_masks.insert(sub_masks.end(), masks.begin() + r * words, masks.begin() + (r + 1) * words);
+                        sub_visibility.push_back(visibility[r]);
+                    }
+                    const Tally t = compareOracle(sub_masks, words, sub_visibility, truth_by_set[s]);
+                    total.bits += t.bits;
+                    total.ties += t.ties;
+                    total.mismatched += t.mismatched;
+                    total.untested += t.untested;
+                    for (size_t i = 0; i < truth_by_set[s].receivers; ++i) blocked += truth_by_set[s].blockedCount(i);
+                }
+                for (size_t r = 0; r < points.size(); ++r) {
+                    uint32_t pop = 0;
+                    for (uint32_t w = 0; w < words; ++w) pop += uint32_t(__builtin_popcount(masks[r * words + w]));
+                    if (visibility[r] >= 0.0f && std::abs(visibility[r] - (1.0f - float(pop) / float(n))) > 1e-6f) ++visibility_errors;
+                }
+                uint64_t twin_diff = 0;
+                if (mode == penumbra::SoftMode::Lut)
+                    for (size_t i = 0; i < masks.size(); ++i)
+                        twin_diff += uint64_t(__builtin_popcount(masks[i] ^ twin_lut.masks[i]));
+                MESSAGE(c.name << " N=" << n << " " << std::string(penumbra::softModeName(mode)) << ": " << total.bits << " bits, " << blocked
+                               << " blocked (oracle), " << total.ties << " ties, mismatched " << total.mismatched << " ("
+                               << double(total.mismatched) / double(std::max<uint64_t>(total.bits, 1)) << "), untested "
+                               << total.untested << "; passes " << f.passes << ", max list " << f.statistics.max_list_length
+                               << ", fragments " << f.fragments << ", pairs " << f.pairs << " (ignored " << f.pairs_ignored
+                               << ", unproven " << f.pairs_unproven << "), uncertain bits "
+                               << double(f.uncertain_bits) / double(std::max<uint64_t>(f.pairs * n, 1)) << " of pair bits, exact tests "
+                               << f.exact_tests << ", unproven planes " << f.planes_unproven << ", overflow " << f.overflow
+                               << (mode == penumbra::SoftMode::Lut ? ", bits != CPU twin lut: " + std::to_string(twin_diff) : std::string()));
+                CHECK(blocked > 0);
+                CHECK(total.untested == 0);
+                CHECK(f.overflow == 0);
+                CHECK(visibility_errors == 0);
+                CHECK(f.pairs > 0);
+                if (mode == penumbra::SoftMode::Lut) {
+                    CHECK(total.mismatched < total.bits / 20);
+                    CHECK(twin_diff <= uint64_t(masks.size()) * 32 / 1000);
+                } else {
+                    CHECK(total.mismatched == 0);
+                }
+                // The LUT decides most bits (measured 1-10 %: pairs within the oracle's reach of their caster,
+                // e.g. columns' ground samples next to a column, are decided sample by sample).
+                if (mode == penumbra::SoftMode::Exact) CHECK(f.uncertain_bits < f.pairs * n / 5);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("GPU sample-based soft: exact and brute equal the oracle, lut reported and close to the CPU twin") {
+    std::vector<Case> cases;
+    cases.push_back({"torus_knot", penumbra::scene::torusKnot(24)});
+    cases.push_back({"columns", penumbra::scene::columns(4)});
+    cases.push_back({"hairball", penumbra::scene::hairball(600, 3)});
+    checkScenes(cases, 400, false);
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("GPU sample-based soft (stress): 2000 receivers, N = 128 and 1024 on every scene, grass too") {
+        std::vector<Case> cases;
+        cases.push_back({"torus_knot", penumbra::scene::torusKnot(24)});
+        cases.push_back({"columns", penumbra::scene::columns(4)});
+        cases.push_back({"hairball", penumbra::scene::hairball(600, 3)});
+        cases.push_back({"grass", penumbra::scene::grass(150, 3)});
+        checkScenes(cases, 2000, true);
+    }
+}
+
+TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup errors throw") {
+    penumbra::test::context();
+    penumbra::Light light;
+    light.center = dvec3(0, 4, 0);
+    light.size = dvec3(0.3);
+    penumbra::LightSampleOptions so;
+    so.count = 64;
+    so.sets = 1;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    penumbra::LightLutOptions lo;
+    lo.resolution = 16;
+    const penumbra::LightLutSetup seed_lut = penumbra::lightLutSetup(sets, lo);
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(0, 4, 0, 1), glm::vec3(-2, 0, -2), glm::vec3(2, 1, 2));
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 32;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, 6.0);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.grid_width = options.grid_height = 32;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }), "certified"));
+    options.grid_width = 16;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, nullptr, influence, vp); }), "differs"));
+    options.grid_width = 32;
+    options.mode = penumbra::SoftMode::Lut;
+    penumbra::SampleBasedSoftShadows pipeline(options, sets, &seed_lut, influence, vp);
+    const penumbra::gl::Buffer positions(16 * 4);
+    const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
+    const penumbra::gl::Buffer table(seed_lut.tableBytes());
+    const penumbra::BufferRange lut_table{table.id(), 0, table.size()};
+    auto draw = [] {};
+#ifdef NDEBUG
+    CHECK(pipeline.run(input, 4, lut_table, draw) == Status::NotReserved);
+    pipeline.reserve(4);
+    CHECK(pipeline.run(input, 4, lut_table.sub(0, 16), draw) == Status::RangeTooSmall);
+    CHECK(pipeline.run(input, 4, lut_table, {}) == Status::InvalidArgument);
+#else
+    pipeline.reserve(4);
+#endif
+    CHECK(pipeline.run(input, 4, lut_table, draw) == Status::Ok);
+}
+
+TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-pass == one pass, per-frame contract") {
+    penumbra::test::context();
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const penumbra::scene::GpuScene gpu(scene);
+    penumbra::scene::GBuffer gbuffer(96, 72);
+    const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
+    gbuffer.render(gpu, camera);
+    const std::vector<glm::vec4> positions = gbuffer.positionBuffer().download<glm::vec4>();
+    const uint32_t count = 96 * 72;
+    REQUIRE(positions.size() >= count);
+    const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), count);
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), lo, hi);
+    double far_depth = 0.0;
+    std::vector<dvec3> receivers;
+    std::vector<uint32_t> ids;
+    for (uint32_t i = 0; i < count; ++i) {
+        if (positions[i].w == 0.0f) continue;
+        far_depth = std::max(far_depth, double((vp * glm::vec4(glm::vec3(positions[i]), 1.0f)).w));
+        receivers.push_back(dvec3(glm::vec3(positions[i])));
+        ids.push_back(i);
+    }
+    REQUIRE(!receivers.empty());
+    penumbra::Light light;
+    light.center = dvec3(scene.light.position);
+    light.size = dvec3(double(scene.light.radius));
+    penumbra::LightSampleOptions so;
+    so.count = 128;
+    so.sets = 1;
+    so.seed = 5;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    penumbra::LightLutOptions lo_options;
+    lo_options.resolution = 64;
+    lo_options.certified = true;
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
+    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
+    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 64;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    const penumbra::SampleBufferInput input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
+    const penumbra::SampleBasedSoftShadows::DrawCasters draw = [&] { gpu.draw(); };  // built once, outside the frame
+
+    std::vector<uint32_t> reference_masks;
+    for (const uint32_t list_block : {16u, 2u}) {
+        INFO("list_block " << list_block);
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.grid_width = options.grid_height = 64;
+        options.list_block = list_block;
+        options.max_list_blocks = 256;
+        options.timings = true;
+        penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
+        pipeline.reserve(count);
+        pipeline.validate(input, count, lut_table);
+        REQUIRE(pipeline.run(input, count, lut_table, draw) == Status::Ok);
+        const std::vector<uint32_t> masks = pipeline.readMasks();
+        const std::vector<float> visibility = pipeline.readVisibility();
+        const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+        if (reference_masks.empty()) {
+            const penumbra::scene::Mesh merged = scene.merged();
+            const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
+            const penumbra::reference::VisibilityResult truth =
+                oracle.evaluate(receivers, std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128));
+            uint64_t mismatched = 0, ties = 0, untested = 0, blocked = 0, background_ok = 0;
+            for (size_t r = 0; r < ids.size(); ++r) {
+                if (visibility[ids[r]] < 0.0f) {
+                    ++untested;
+                    continue;
+                }
+                blocked += truth.blockedCount(r);
+                for (uint32_t s = 0; s < 128; ++s) {
+                    if (truth.isTie(r, s)) {
+                        ++ties;
+                        continue;
+                    }
+                    mismatched += bitOf(masks, 4, ids[r], s) != truth.isBlocked(r, s);
+                }
+            }
+            for (uint32_t i = 0; i < count; ++i)
+                background_ok += positions[i].w == 0.0f && visibility[i] == float(PENUMBRA_SBS_VISIBILITY_NO_SAMPLE);
+            MESSAGE("G-buffer 96x72, N=128: ", receivers.size(), " samples, ", blocked, " blocked bits, ", ties, " ties, mismatched ",
+                    mismatched, ", untested ", untested, "; passes ", f.passes, ", uncertain ",
+                    double(f.uncertain_bits) / double(std::max<uint64_t>(f.pairs * 128, 1)), " of pair bits");
+            CHECK(blocked > 0);
+            CHECK(mismatched == 0);
+            CHECK(untested == 0);
+            CHECK(background_ok == count - receivers.size());
+            reference_masks = masks;
+        } else {
+            MESSAGE("list_block 2: ", f.passes, " passes (max list ", f.statistics.max_list_length, ")");
+        }
+        // Plumbing only: llvmpipe's GL_TIME_ELAPSED values are not usable (benchmarks/scan_bench.cpp).
+        MESSAGE("list_block ", list_block, " GPU timer ms (meaningless on llvmpipe): lists ", f.lists_ns * 1e-6, ", light pass ",
+                f.light_pass_ns * 1e-6, ", resolve ", f.resolve_ns * 1e-6);
+        if (list_block == 2) {
+            CHECK(f.passes > 1);
+            CHECK(f.overflow == 0);
+            CHECK(masks == reference_masks);
+        }
+        // Per-frame contract (docs/design.md convention 2): after warm-up, no query, error check,
+        // read-back, map, wait or allocation.
+        glFinish();
+        penumbra::test::GlAudit audit;
+        penumbra::test::AllocationCounter heap;
+        audit.start();
+        heap.start();
+        const Status status = pipeline.run(input, count, lut_table, draw);
+        heap.stop();
+        audit.stop();
+        INFO(audit.report());
+        CHECK(status == Status::Ok);
+        CHECK(audit.calls() > 0);
+        CHECK(audit.queries() == 0);
+        CHECK(audit.errorChecks() == 0);
+        CHECK(audit.readBacks() == 0);
+        CHECK(audit.maps() == 0);
+        CHECK(audit.syncWaits() == 0);
+        CHECK(heap.allocations() == 0);
+        MESSAGE("run: ", audit.calls(), " GL calls, ", audit.queries(), " queries, ", heap.allocations(), " allocations");
+        glBindBuffer(0xDEADu, 0);  // an engine's queued error survives run()
+        pipeline.run(input, count, lut_table, draw);
+        CHECK(glGetError() == GL_INVALID_ENUM);
+    }
+}
+
+TEST_CASE("GPU sample-based soft: depth-reconstructed view samples, exact == oracle on the positions the GPU used") {
+    penumbra::test::context();
+    const penumbra::scene::Scene scene = penumbra::scene::columns(4);
+    const penumbra::scene::GpuScene gpu(scene);
+    penumbra::scene::GBuffer gbuffer(96, 72);
+    const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
+    gbuffer.render(gpu, camera);
+    const uint32_t count = 96 * 72;
+    const std::vector<glm::vec4> gpositions = gbuffer.positionBuffer().download<glm::vec4>();
+    const auto [lo0, hi0] = penumbra::viewSampleBounds(gpositions.data(), count);
+    // Depth reconstruction moves samples by ~1e-5 relative: widen the box so every one is inside.
+    const glm::vec3 pad = 0.01f * (hi0 - lo0) + glm::vec3(1e-3f);
+    const glm::vec3 lo = lo0 - pad, hi = hi0 + pad;
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), lo, hi);
+    double far_depth = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 x((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z);
+        far_depth = std::max(far_depth, double((vp * glm::vec4(x, 1.0f)).w));
+    }
+    penumbra::Light light;
+    light.center = dvec3(scene.light.position);
+    light.size = dvec3(double(scene.light.radius));
+    penumbra::LightSampleOptions so;
+    so.count = 128;
+    so.sets = 1;
+    so.seed = 7;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    penumbra::LightLutOptions lo_options;
+    lo_options.resolution = 64;
+    lo_options.certified = true;
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
+    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
+    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 64;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    penumbra::SampleListsView view;
+    view.width = 96;
+    view.height = 72;
+    view.inverse_view_projection = glm::inverse(camera);
+    const penumbra::SampleDepthInput input{gbuffer.depthTexture(), 0, view};
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.grid_width = options.grid_height = 64;
+    options.max_list_blocks = 256;
+    penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
+    pipeline.reserve(count);
+    pipeline.validate(input, lut_table);
+    REQUIRE(pipeline.run(input, lut_table, [&] { gpu.draw(); }) == Status::Ok);
+    const std::vector<uint32_t> masks = pipeline.readMasks();
+    const std::vector<float> visibility = pipeline.readVisibility();
+    const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+    // The positions the GPU reconstructed and tested: the lists' slots.
+    const penumbra::SampleListsBuffers lists = pipeline.buffers();
+    const uint32_t listed = f.statistics.accepted;
+    REQUIRE(listed > 0);
+    std::vector<glm::vec4> slot_positions(listed);
+    std::vector<uint32_t> slot_ids(listed);
+    glGetNamedBufferSubData(lists.list_positions.buffer, 0, GLsizeiptr(listed) * 16, slot_positions.data());
+    glGetNamedBufferSubData(lists.list_ids.buffer, 0, GLsizeiptr(listed) * 4, slot_ids.data());
+    std::vector<dvec3> receivers;
+    for (const auto& p : slot_positions) receivers.push_back(dvec3(glm::vec3(p)));
+    const penumbra::scene::Mesh merged = scene.merged();
+    const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
+    const penumbra::reference::VisibilityResult truth =
+        oracle.evaluate(receivers, std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128));
+    uint64_t mismatched = 0, ties = 0, blocked = 0, untested = 0;
+    for (uint32_t r = 0; r < listed; ++r) {
+        const uint32_t id = slot_ids[r];
+        if (visibility[id] < 0.0f) {
+            ++untested;
+            continue;
+        }
+        blocked += truth.blockedCount(r);
+        for (uint32_t s = 0; s < 128; ++s) {
+            if (truth.isTie(r, s)) {
+                ++ties;
+                continue;
+            }
+            mismatched += bitOf(masks, 4, id, s) != truth.isBlocked(r, s);
+        }
+    }
+    uint32_t rejected_not_background = 0;
+    for (uint32_t reason = 1; reason < f.statistics.rejected.size(); ++reason) rejected_not_background += f.statistics.rejected[reason];
+    MESSAGE("depth input 96x72 columns, N=128: ", listed, " listed samples (", rejected_not_background,
+            " rejected other than background), ", blocked, " blocked bits, ", ties, " ties, mismatched ", mismatched,
+            ", untested ", untested, "; passes ", f.passes, ", uncertain ",
+            double(f.uncertain_bits) / double(std::max<uint64_t>(f.pairs * 128, 1)), " of pair bits, unproven pairs ",
+            f.pairs_unproven, " of ", f.pairs);
+    CHECK(blocked > 0);
+    CHECK(mismatched == 0);
+    CHECK(untested == 0);
+    CHECK(rejected_not_background == 0);
+}
