@@ -42,6 +42,7 @@
 #include "penumbra/gl/validate.hpp"
 #include "penumbra/sample_lists.hpp"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -487,6 +488,39 @@ inline SampleListsCpu downloadSampleLists(const SampleListsSetup& setup, const S
     out.header = counters;
     return out;
 }
+
+/// The list buffers a pipeline owns for its SampleListBuilder (every SampleListsBuffers range):
+/// sized at load time by reserve(), handed to build() as ranges(). Shared by the hard and the
+/// soft pipelines.
+struct SampleListStorage {
+    gl::Buffer counts, offsets, positions, ids, slots, texels, header, frustum;
+    uint32_t samples = 0;  ///< view samples the per-sample buffers hold (0 before reserve)
+
+    /// Load time: the per-texel buffers and the frustum block once, the per-sample ones for at
+    /// least max(max_samples, 1) samples (empty buffers are not created; one element keeps the
+    /// bindings valid). Returns true when the per-sample buffers were (re)allocated.
+    bool reserve(const SampleListsSetup& setup, uint32_t max_samples) {
+        if (!counts.id()) {
+            counts = gl::Buffer(setup.counts_bytes);
+            offsets = gl::Buffer(setup.offsets_bytes);
+            header = gl::Buffer(setup.header_bytes);
+        }
+        if (!frustum.id()) frustum = gl::Buffer(sizeof(SampleListsFrustum));
+        const uint32_t n = std::max<uint32_t>(max_samples, 1);
+        if (samples != 0 && n <= samples) return false;
+        positions = gl::Buffer(size_t(n) * 16);
+        ids = gl::Buffer(size_t(n) * 4);
+        slots = gl::Buffer(size_t(n) * 4);
+        texels = gl::Buffer(size_t(n) * 4);
+        samples = n;
+        return true;
+    }
+    /// The whole buffers as the builder's ranges.
+    SampleListsBuffers ranges() const {
+        auto r = [](const gl::Buffer& b) { return BufferRange{b.id(), 0, b.size()}; };
+        return {r(counts), r(offsets), r(positions), r(ids), r(slots), r(texels), r(header), r(frustum)};
+    }
+};
 
 }  // namespace penumbra
 

@@ -160,7 +160,7 @@ public:
         params_staging_.assign(size_t(param_stride_) * paramSlots(), 0u);
         afh_params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
         work_ = gl::Buffer(PENUMBRA_AFH_WORK_WORDS * 4);
-        frustum_ = gl::Buffer(sizeof(SampleListsFrustum));
+        lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
         framebuffer_ = gl::Framebuffer::create();
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
@@ -181,21 +181,11 @@ public:
     void reserve(uint32_t max_samples) {
         const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, max_samples);
         builder_.reserve(s);
-        if (!counts_.id()) {
-            counts_ = gl::Buffer(s.counts_bytes);
-            offsets_ = gl::Buffer(s.offsets_bytes);
-            header_ = gl::Buffer(s.header_bytes);
-        }
-        // Buffers of zero bytes are not created; keep at least one element so bindings stay valid.
-        const size_t samples = std::max<size_t>(max_samples, 1);
-        if (reserved_ != 0 && samples <= reserved_) return;
-        list_positions_ = gl::Buffer(samples * 16);
-        list_ids_ = gl::Buffer(samples * 4);
-        sample_slots_ = gl::Buffer(samples * 4);
-        sample_texels_ = gl::Buffer(samples * 4);
+        if (!lists_.reserve(s, max_samples)) return;
+        const size_t samples = lists_.samples;
         shadow_ = gl::Buffer(std::max<size_t>(shadowBitsBytes(samples, 1), 4));
         states_ = gl::Buffer(samples * 4);
-        reserved_ = static_cast<uint32_t>(samples);
+        reserved_ = lists_.samples;
         gl::checkErrors("penumbra::AliasFreeHardShadows::reserve");
     }
 
@@ -265,11 +255,7 @@ public:
     const gl::Buffer& stateBuffer() const { return states_; }
     BufferRange states() const { return {states_.id(), 0, states_.size()}; }
     /// The lists of the last run (positions, ids, slots ... see SampleListsBuffers).
-    SampleListsBuffers buffers() const {
-        auto r = [](const gl::Buffer& b) { return BufferRange{b.id(), 0, b.size()}; };
-        return {r(counts_),       r(offsets_),       r(list_positions_), r(list_ids_),
-                r(sample_slots_), r(sample_texels_), r(header_),         r(frustum_)};
-    }
+    SampleListsBuffers buffers() const { return lists_.ranges(); }
     const SampleListsSetup& setup() const { return setup_; }
     const gl::Buffer& shadowBits() const { return shadow_; }
     uint32_t reservedSamples() const { return reserved_; }
@@ -288,11 +274,12 @@ private:
     SampleListBuilder builder_;
     ConservativeRasterSetup conservative_;
     gl::Program light_pass_, spill_pass_, blocks_, resolve_;
-    gl::Buffer conservative_params_, afh_params_, work_, frustum_;
+    gl::Buffer conservative_params_, afh_params_, work_;
     gl::Buffer spill_, spill_world_;  // two-pass only: spill header + triangles, spill-world header + vertices
     gl::ConservativeRasterBindings spill_bindings_{};
     bool two_pass_ = false;
-    gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, shadow_, states_;
+    SampleListStorage lists_;
+    gl::Buffer shadow_, states_;
     gl::Framebuffer framebuffer_;
     gl::VertexArray empty_vao_;
     std::vector<gl::OcclusionQuery> block_queries_;
@@ -371,7 +358,7 @@ private:
         blocks_.use();
         glBindVertexArray(empty_vao_.id());
         bindParams(0);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, header_.id(), 0, sizeof(SampleListsHeader));
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginQuery(GL_ANY_SAMPLES_PASSED, block_queries_[b].id());
             glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
@@ -380,10 +367,10 @@ private:
         // (4) Light pass, block by block; blocks no list needs are skipped by the GPU.
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
-        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.frustum, frustum_.id(), 0, sizeof(SampleListsFrustum));
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, list_positions_.id());
+        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.frustum, lists_.frustum.id(), 0, sizeof(SampleListsFrustum));
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         static constexpr shared::PenumbraAfhSpillWorldHeader kSpillWorldReset{};
@@ -427,10 +414,10 @@ private:
         // (5) Resolve.
         resolve_.use();
         bindParams(0);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, sample_slots_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, sample_texels_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (states.empty()) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.states, states_.id());

@@ -167,7 +167,7 @@ public:
         const std::vector<glm::dvec4> world = sampleBasedSoftWorldSamples(sets_);
         samples_ = gl::Buffer::fromVector(world);
         work_ = gl::Buffer(PENUMBRA_SBS_WORK_WORDS * 4);
-        frustum_ = gl::Buffer(sizeof(SampleListsFrustum));
+        lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
         dummy_ = gl::Buffer(16);
         framebuffer_ = gl::Framebuffer::create();
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
@@ -195,20 +195,11 @@ public:
     void reserve(uint32_t max_samples) {
         const SampleListsSetup s = sampleListsSetup(options_.grid_width, options_.grid_height, max_samples);
         builder_.reserve(s);
-        if (!counts_.id()) {
-            counts_ = gl::Buffer(s.counts_bytes);
-            offsets_ = gl::Buffer(s.offsets_bytes);
-            header_ = gl::Buffer(s.header_bytes);
-        }
-        const size_t samples = std::max<size_t>(max_samples, 1);
-        if (reserved_ != 0 && samples <= reserved_) return;
-        list_positions_ = gl::Buffer(samples * 16);
-        list_ids_ = gl::Buffer(samples * 4);
-        sample_slots_ = gl::Buffer(samples * 4);
-        sample_texels_ = gl::Buffer(samples * 4);
+        if (!lists_.reserve(s, max_samples)) return;
+        const size_t samples = lists_.samples;
         masks_ = gl::Buffer(samples * words_ * 4);
         visibility_ = gl::Buffer(samples * 4);
-        reserved_ = static_cast<uint32_t>(samples);
+        reserved_ = lists_.samples;
         gl::checkErrors("penumbra::SampleBasedSoftShadows::reserve");
     }
 
@@ -284,11 +275,7 @@ public:
 
     BufferRange masks() const { return {masks_.id(), 0, masks_.size()}; }
     BufferRange visibility() const { return {visibility_.id(), 0, visibility_.size()}; }
-    SampleListsBuffers buffers() const {
-        auto r = [](const gl::Buffer& b) { return BufferRange{b.id(), 0, b.size()}; };
-        return {r(counts_),       r(offsets_),       r(list_positions_), r(list_ids_),
-                r(sample_slots_), r(sample_texels_), r(header_),         r(frustum_)};
-    }
+    SampleListsBuffers buffers() const { return lists_.ranges(); }
     const SampleListsSetup& setup() const { return setup_; }
     GLuint lightPassProgram() const { return light_pass_.id(); }
     uint32_t reservedSamples() const { return reserved_; }
@@ -306,8 +293,9 @@ private:
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
     gl::Program light_pass_, blocks_, resolve_;
-    gl::Buffer params_, influence_params_, samples_, work_, frustum_, dummy_;
-    gl::Buffer counts_, offsets_, list_positions_, list_ids_, sample_slots_, sample_texels_, header_, masks_, visibility_;
+    gl::Buffer params_, influence_params_, samples_, work_, dummy_;
+    SampleListStorage lists_;
+    gl::Buffer masks_, visibility_;
     gl::Framebuffer framebuffer_;
     gl::VertexArray empty_vao_;
     std::vector<gl::OcclusionQuery> block_queries_;
@@ -392,7 +380,7 @@ private:
         blocks_.use();
         glBindVertexArray(empty_vao_.id());
         bindParams(0);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, header_.id(), 0, sizeof(SampleListsHeader));
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginQuery(GL_ANY_SAMPLES_PASSED, block_queries_[b].id());
             glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
@@ -401,10 +389,10 @@ private:
         // (3) Light pass, block by block; blocks no list needs are skipped by the GPU.
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, offsets_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, list_positions_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, list_ids_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, lists_.ids.id());
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (lut_table.empty()) {
@@ -431,9 +419,9 @@ private:
         if (!timers_.empty()) timers_[2].begin();
         resolve_.use();
         bindParams(0);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, sample_slots_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, sample_texels_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.resolve_offsets, offsets_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.resolve_offsets, lists_.offsets.id());
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (frame.visibility.empty()) {
