@@ -640,10 +640,16 @@ struct HullRaster {
     std::vector<glm::ivec2> uncertain;  ///< within `tolerance` of the boundary
 };
 
-inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const ConservativeRasterSetup& setup,
-                                            double tolerance = 0.0) {
+namespace detail {
+
+/// GL's polygon rule on `count` CCW pixel-space vertices (centre strictly inside, or on a top or
+/// left edge) over a width x height viewport, optionally clipped to `box` (x0, y0, x1, y1); centres
+/// within `tolerance` of the boundary go to `uncertain`. Double on the float vertices. Shared by
+/// rasterizeConservativeHull and influenceRegionTexels.
+inline HullRaster pixelRule(const glm::vec2* pixels, int count, int width, int height, const glm::dvec4* box,
+                            double tolerance) {
     HullRaster out;
-    if (hull.count < 3) return out;
+    if (count < 3) return out;
     // Polygon edges in CCW order, skipping zero-length ones; distances are exact up to double rounding.
     struct Edge {
         glm::dvec2 a, n;  // point, unit outward normal
@@ -651,9 +657,9 @@ inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const 
     };
     std::vector<Edge> edges;
     glm::dvec2 lo(1e300), hi(-1e300);
-    for (int i = 0; i < hull.count; ++i) {
-        const glm::dvec2 a(hull.pixels[static_cast<size_t>(i)]);
-        const glm::dvec2 b(hull.pixels[static_cast<size_t>((i + 1) % hull.count)]);
+    for (int i = 0; i < count; ++i) {
+        const glm::dvec2 a(pixels[i]);
+        const glm::dvec2 b(pixels[(i + 1) % count]);
         lo = glm::min(lo, a);
         hi = glm::max(hi, a);
         const glm::dvec2 d = b - a;
@@ -664,12 +670,10 @@ inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const 
         const bool top_left = (d.y == 0.0 && d.x < 0.0) || d.y < 0.0;
         edges.push_back({a, glm::dvec2(d.y, -d.x) / length, top_left});
     }
-    const glm::dvec2 origin(setup.params.viewport.x, setup.params.viewport.y);
-    const glm::dvec4 box = glm::dvec4(hull.box) - glm::dvec4(origin, origin);
     const int x0 = std::max(0, static_cast<int>(std::floor(lo.x - 1.0)));
     const int y0 = std::max(0, static_cast<int>(std::floor(lo.y - 1.0)));
-    const int x1 = std::min(setup.width() - 1, static_cast<int>(std::ceil(hi.x + 1.0)));
-    const int y1 = std::min(setup.height() - 1, static_cast<int>(std::ceil(hi.y + 1.0)));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(hi.x + 1.0)));
+    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(hi.y + 1.0)));
     for (int y = y0; y <= y1; ++y) {
         for (int x = x0; x <= x1; ++x) {
             const glm::dvec2 centre(x + 0.5, y + 0.5);
@@ -680,9 +684,9 @@ inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const 
                 nearest = std::min(nearest, std::abs(outside));
                 if (outside > 0.0 || (outside == 0.0 && !e.top_left)) inside = false;
             }
-            if (setup.options.clip_to_box) {
-                const double box_distance = std::min(std::min(centre.x - box.x, box.z - centre.x),
-                                                     std::min(centre.y - box.y, box.w - centre.y));
+            if (box) {
+                const double box_distance = std::min(std::min(centre.x - box->x, box->z - centre.x),
+                                                     std::min(centre.y - box->y, box->w - centre.y));
                 nearest = std::min(nearest, std::abs(box_distance));
                 if (box_distance < 0.0) inside = false;
             }
@@ -694,6 +698,16 @@ inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const 
         }
     }
     return out;
+}
+
+}  // namespace detail
+
+inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const ConservativeRasterSetup& setup,
+                                            double tolerance = 0.0) {
+    const glm::dvec2 origin(setup.params.viewport.x, setup.params.viewport.y);
+    const glm::dvec4 box = glm::dvec4(hull.box) - glm::dvec4(origin, origin);
+    return detail::pixelRule(hull.pixels.data(), hull.count, setup.width(), setup.height(),
+                             setup.options.clip_to_box ? &box : nullptr, tolerance);
 }
 
 /// Ground truth, part 1: the triangle clipped to the near plane and w >= min_w (and, to keep the

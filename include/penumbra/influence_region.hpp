@@ -690,46 +690,7 @@ inline InfluenceRegion influenceRegion(const glm::vec3& v0, const glm::vec3& v1,
 /// boundary go to `uncertain` (a rasterizer that snaps vertices may decide them either way).
 inline HullRaster influenceRegionTexels(const InfluenceRegion& region, const InfluenceRegionSetup& setup,
                                         double tolerance = 0.0) {
-    HullRaster out;
-    if (region.count < 3) return out;
-    struct Edge {
-        glm::dvec2 a, n;
-        bool top_left;
-    };
-    std::vector<Edge> edges;
-    glm::dvec2 lo(1e300), hi(-1e300);
-    for (int i = 0; i < region.count; ++i) {
-        const glm::dvec2 a(region.pixels[static_cast<size_t>(i)]);
-        const glm::dvec2 b(region.pixels[static_cast<size_t>((i + 1) % region.count)]);
-        lo = glm::min(lo, a);
-        hi = glm::max(hi, a);
-        const glm::dvec2 d = b - a;
-        const double length = std::sqrt(glm::dot(d, d));
-        if (length == 0.0) continue;
-        edges.push_back({a, glm::dvec2(d.y, -d.x) / length, (d.y == 0.0 && d.x < 0.0) || d.y < 0.0});
-    }
-    const int x0 = std::max(0, static_cast<int>(std::floor(lo.x - 1.0)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(lo.y - 1.0)));
-    const int x1 = std::min(setup.width() - 1, static_cast<int>(std::ceil(hi.x + 1.0)));
-    const int y1 = std::min(setup.height() - 1, static_cast<int>(std::ceil(hi.y + 1.0)));
-    for (int y = y0; y <= y1; ++y) {
-        for (int x = x0; x <= x1; ++x) {
-            const glm::dvec2 centre(x + 0.5, y + 0.5);
-            bool inside = true;
-            double nearest = 1e300;
-            for (const Edge& e : edges) {
-                const double outside = glm::dot(centre - e.a, e.n);
-                nearest = std::min(nearest, std::abs(outside));
-                if (outside > 0.0 || (outside == 0.0 && !e.top_left)) inside = false;
-            }
-            if (nearest < tolerance) {
-                out.uncertain.emplace_back(x, y);
-            } else if (inside) {
-                out.fragments.emplace_back(x, y);
-            }
-        }
-    }
-    return out;
+    return detail::pixelRule(region.pixels.data(), region.count, setup.width(), setup.height(), nullptr, tolerance);
 }
 
 /// GL's rule for one texel of the emitted polygon (double, on the float vertices).
