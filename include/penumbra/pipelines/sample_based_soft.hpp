@@ -212,6 +212,16 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     const double margin_world = budget * min_scale;
     const double eps = std::max(options.oracle.tie_epsilon, options.oracle.coplanar_epsilon);
     const uint32_t tables = lut ? lut->params.tables_per_set : 0;
+    // T's plane depends on T alone: built once per caster, oriented per receiver by negation (exact:
+    // every operation of localPlane commutes with it, so the bits are those of building it flipped).
+    std::vector<soft::LocalPlane> support(mode == SoftMode::Brute ? 0 : casters.triangle_count);
+    for (size_t t = 0; t < support.size(); ++t) {
+        const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
+        const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
+        const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
+        support[t] = soft::localPlane(frame, v0, v1 - v0, v2 - v0, false,
+                                      oracle::length3(frame.center) + max_scale * std::sqrt(3.0), min_scale, budget);
+    }
 
     for (size_t r = 0; r < receivers.count; ++r) {
         const glm::dvec3 p(receivers.positions[r]);
@@ -273,8 +283,9 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 soft::localPlane(frame, p, b, c, positive, reach_world, min_scale, budget),
                 soft::localPlane(frame, p, c, a, positive, reach_world, min_scale, budget),
                 // T's plane through v0, oriented with p in front: samples beyond T are behind it.
-                soft::localPlane(frame, v0, v1 - v0, v2 - v0, positive, reach_world, min_scale, budget),
+                support[t],
             };
+            if (positive) planes[3].plane = -planes[3].plane;
             if (mode == SoftMode::Exact && unproven) {
                 ++result.pairs_unproven;
                 result.uncertain_bits += n;

@@ -132,6 +132,10 @@ void main() {
     const dvec3 v0 = dvec3(penumbraSbsVertex0), v1 = dvec3(penumbraSbsVertex1), v2 = dvec3(penumbraSbsVertex2);
     const uint mode = P.config.x, n = P.config.y, words = P.config.w, tables = P.counts.z;
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
+    // T's plane depends on T alone: built once per fragment, oriented per sample by negation (which
+    // commutes exactly with every operation of penumbraSbsLocalPlane: the same bits as building it
+    // flipped).
+    const PenumbraSbsPlane support = penumbraSbsLocalPlane(v0, v1 - v0, v2 - v0, false);
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
@@ -164,7 +168,8 @@ void main() {
             planes[0] = penumbraSbsLocalPlane(p, a, b, positive);
             planes[1] = penumbraSbsLocalPlane(p, b, c, positive);
             planes[2] = penumbraSbsLocalPlane(p, c, a, positive);
-            planes[3] = penumbraSbsLocalPlane(v0, v1 - v0, v2 - v0, positive);  // T's plane: p in front
+            planes[3] = support;  // T's plane, p in front
+            if (positive) planes[3].plane = -planes[3].plane;
             if (all_exact) {
                 ++unproven_pairs;
                 uncertain_bits += n;
