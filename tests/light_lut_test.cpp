@@ -127,6 +127,8 @@ TEST_CASE("light lut: bad input is a clear error") {
     CHECK(contains(errorOf([&] { penumbra::lightLutSetup(samples, 128, options); }), "tolerance"));
     options.tolerance = std::nan("");
     CHECK(contains(errorOf([&] { penumbra::lightLutSetup(samples, 128, options); }), "tolerance"));
+    options.tolerance = 1.5e-2;  // above the documented 1e-2
+    CHECK(contains(errorOf([&] { penumbra::lightLutSetup(samples, 128, options); }), "1e-2"));
     options.tolerance = 1e-6;
     std::vector<dvec3> bad = samples;
     bad[7] = dvec3(0.0, std::nan(""), 0.0);

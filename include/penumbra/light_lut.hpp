@@ -51,7 +51,9 @@
 // consumer that tests the uncertain samples against the actual plane gets the exact mask. The
 // certificate holds for lookups whose normal-cell coordinates, d and sample positions are each off
 // by at most `tolerance` (1e-6 covers float lookups and float samples on any GPU for the octahedral
-// mapping; for two angles it also has to cover the driver's acos/atan2).
+// mapping; for two angles it also has to cover the driver's acos/atan2). A consumer may ask for
+// more (up to 1e-2) to buy a margin: the soft pipeline's Exact mode needs one above the oracle's
+// coplanar reach (sampleBasedSoftLutTolerance); each certificate then covers planes that far off.
 //
 // Determinism. The generator evaluates only fp64 +, * and compares (products rounded separately, no
 // fused multiply-add: detail::mulRounded here, `precise` in GLSL) on the three arrays the setup
@@ -60,7 +62,7 @@
 // light_samples.hpp, so they are the same on every IEEE-754 platform.
 //
 // Bad input (penumbra::Error at setup, naming the value): N not a multiple of 32 or outside 32..1024,
-// sets 0, resolution outside 16..256 or odd, tolerance not in [0, 1e-3], a sample not finite or with
+// sets 0, resolution outside 16..256 or odd, tolerance not in [0, 1e-2], a sample not finite or with
 // |q| > 1 - 2^-20, a table beyond 2^32 uvec4s. Per lookup (no throw): a plane with a non-finite value
 // or a zero normal has the documented empty mask (no sample behind, certain).
 #ifndef PENUMBRA_LIGHT_LUT_HPP
@@ -255,8 +257,8 @@ inline LightLutSetup lightLutSetup(const glm::dvec3* local, uint32_t samples_per
                    PENUMBRA_LUT_MAX_RESOLUTION, " (got ", r, ")");
     PENUMBRA_CHECK(options.mapping == LutNormalMapping::Octahedral || options.mapping == LutNormalMapping::Spherical,
                    "lightLutSetup: unknown normal mapping ", static_cast<uint32_t>(options.mapping));
-    PENUMBRA_CHECK(options.tolerance >= 0.0 && options.tolerance <= 1e-3,
-                   "lightLutSetup: tolerance must be in [0, 1e-3] (got ", options.tolerance, ")");
+    PENUMBRA_CHECK(options.tolerance >= 0.0 && options.tolerance <= 1e-2,
+                   "lightLutSetup: tolerance must be in [0, 1e-2] (got ", options.tolerance, ")");
     const uint32_t tables_per_set = (samples_per_set + 127u) / 128u;
     const uint64_t texels = uint64_t(r) * r * r;
     const uint64_t total = texels * tables_per_set * sets * (options.certified ? 2u : 1u);

@@ -26,9 +26,11 @@
 //              counts as all-uncertain;
 //            - T is ignored for every light sample when p lies within the oracle's coplanar reach
 //              of T for all of them, and all of T's bits are uncertain when p lies within
-//              2 max(tie, coplanar epsilon) * scale of T or the LUT's margin in world units
-//              (tolerance / 2 * the light's smallest semi-axis) is not above that reach: there the
-//              oracle's coplanar rule or its t-near-0/1 rounding could decide differently;
+//              2 max(tie, coplanar epsilon) * scale of T, or when the LUT's margin in world units
+//              (tolerance / 2 * the light's smallest semi-axis) is not above 2 tie_epsilon * scale
+//              (2 max(tie, coplanar epsilon) * scale where the light's bounding sphere comes within
+//              that coplanar reach of T): there the oracle's coplanar rule (for a light sample on
+//              T) or its t-near-0/1 rounding could decide differently;
 //          elsewhere a certain bit is the geometric truth by a margin far above the oracle's
 //          rounding, hence the oracle's verdict (its near-edge "ties" still count as blocked or not
 //          exactly as the oracle says: a tie only flags closeness).
@@ -211,16 +213,21 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     const double budget = 0.5 * tolerance;
     const double margin_world = budget * min_scale;
     const double eps = std::max(options.oracle.tie_epsilon, options.oracle.coplanar_epsilon);
+    const double light_reach = max_scale * std::sqrt(3.0);  // |x - centre| over the light, any norm
     const uint32_t tables = lut ? lut->params.tables_per_set : 0;
     // T's plane depends on T alone: built once per caster, oriented per receiver by negation (exact:
     // every operation of localPlane commutes with it, so the bits are those of building it flipped).
+    // So does the squared distance from the light's centre to T (is any light sample within the
+    // oracle's coplanar reach of T?).
     std::vector<soft::LocalPlane> support(mode == SoftMode::Brute ? 0 : casters.triangle_count);
+    std::vector<double> light_distance2(support.size());
     for (size_t t = 0; t < support.size(); ++t) {
         const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
         const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
         const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
-        support[t] = soft::localPlane(frame, v0, v1 - v0, v2 - v0, false,
-                                      oracle::length3(frame.center) + max_scale * std::sqrt(3.0), min_scale, budget);
+        support[t] = soft::localPlane(frame, v0, v1 - v0, v2 - v0, false, oracle::length3(frame.center) + light_reach,
+                                      min_scale, budget);
+        light_distance2[t] = detail::pointTriangleDistance2<double>(frame.center, v0, v1, v2);
     }
 
     for (size_t r = 0; r < receivers.count; ++r) {
@@ -230,7 +237,6 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         uint32_t* out = result.masks.data() + r * words;
         // Bounds of the oracle's per-sample scale term |s - p|_inf over the light.
         const double centre_reach = soft::maxAbs3(frame.center - p);
-        const double light_reach = max_scale * std::sqrt(3.0);
         const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
         const double light_far = oracle::length3(frame.center) + light_reach;  // |x| over the light
 
@@ -264,7 +270,14 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                     continue;
                 }
                 const double reach = 2.0 * eps * scale_hi;
-                unproven = mode == SoftMode::Exact && (distance2 <= reach * reach * (1.0 + 1e-9) || !(margin_world > reach));
+                // The LUT's margin must exceed the reach of the oracle's rules at the light samples:
+                // its tie/rounding reach always, its coplanar reach only where a light sample can
+                // come that close to T (a light touching a caster, not an ordinary scene).
+                const double light_near = 2.0 * options.oracle.coplanar_epsilon * scale_hi + light_reach;
+                const bool light_touches = light_distance2[t] <= light_near * light_near * (1.0 + 1e-9);
+                const double margin_reach = 2.0 * (light_touches ? eps : options.oracle.tie_epsilon) * scale_hi;
+                unproven = mode == SoftMode::Exact &&
+                           (distance2 <= reach * reach * (1.0 + 1e-9) || !(margin_world > margin_reach));
             }
             // Orientation of the shadow cone: the opposite vertex behind each edge plane; p in front
             // of T's plane. det = (v0 - p) . ((v1 - p) x (v2 - p)) decides both: cross(a, b) . c,
@@ -410,6 +423,35 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
                           has_sets ? 1u : 0u);
     if (lut) p.lut = lut->params;
     return p;
+}
+
+/// The smallest certified-LUT tolerance (LightLutOptions::tolerance) at which Exact can vouch for
+/// certain bits of a (view sample, caster) pair instead of testing every light sample, for
+/// receivers and casters inside the box [lo, hi] (world). Exact trusts the LUT for a pair only
+/// when the LUT's margin in world units, tolerance * plane_budget * (smallest semi-axis), exceeds
+/// the oracle's reach at the light samples, 2 * tie_epsilon * s, s = the pair's largest
+/// |x - p|_inf over the caster's vertices and the light (bounded here by the box's extent and its
+/// farthest corner from the light centre plus the light's reach). (Casters the light comes within
+/// the coplanar reach of need 2 * max(coplanar, tie) * s: those pairs are decided sample by
+/// sample unless the tolerance covers that too; not counted here.) With the oracle's default
+/// tie_epsilon 1e-9 the LUT's default 1e-6 suffices for scenes up to ~10^2 light radii across; a
+/// larger tolerance widens every lookup's uncertain band by that much (cell coordinates, next to
+/// the cells' half width 1/R): use this value, not more. Never below 1e-6. Throws for a
+/// non-finite box.
+inline double sampleBasedSoftLutTolerance(const SampleBasedSoftGpuOptions& o, const LightFrame& frame,
+                                          const glm::dvec3& lo, const glm::dvec3& hi) {
+    validateSampleBasedSoftGpuOptions(o);
+    PENUMBRA_CHECK(std::isfinite(lo.x) && std::isfinite(lo.y) && std::isfinite(lo.z) && std::isfinite(hi.x) &&
+                       std::isfinite(hi.y) && std::isfinite(hi.z) && lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z,
+                   "penumbra::sampleBasedSoftLutTolerance: the box (", lo.x, ", ", lo.y, ", ", lo.z, ") .. (", hi.x, ", ",
+                   hi.y, ", ", hi.z, ") must be finite and ordered");
+    const double min_scale = std::min(frame.scale.x, std::min(frame.scale.y, frame.scale.z));
+    const double max_scale = std::max(frame.scale.x, std::max(frame.scale.y, frame.scale.z));
+    const glm::dvec3 extent = hi - lo;
+    const glm::dvec3 far_corner = glm::max(glm::abs(frame.center - lo), glm::abs(frame.center - hi));
+    const double reach_scale = std::max(detail::soft::maxAbs3(extent), detail::soft::maxAbs3(far_corner) + max_scale * std::sqrt(3.0));
+    const double needed = 2.0 * o.oracle.tie_epsilon * reach_scale / (o.plane_budget * min_scale);
+    return std::max(1e-6, 1.25 * needed);  // 25 % above the bound: the per-pair check is strict
 }
 
 /// World light samples as the GPU reads them: dvec4 (xyz, 0) per sample, set-major (K * N).

@@ -136,6 +136,9 @@ void main() {
     // commutes exactly with every operation of penumbraSbsLocalPlane: the same bits as building it
     // flipped).
     const PenumbraSbsPlane support = penumbraSbsLocalPlane(v0, v1 - v0, v2 - v0, false);
+    // ... and so does the squared distance from the light's centre to T (can a light sample come
+    // within the oracle's coplanar reach of T?).
+    const double light_distance2 = penumbraAfhPointTriangleDistance2(P.center.xyz, v0, v1, v2);
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
@@ -159,7 +162,12 @@ void main() {
                 continue;
             }
             precise double reach = 2.0LF * P.epsilon.z * scale_hi;
-            all_exact = exact && (distance2 <= reach * reach * (1.0LF + 1e-9LF) || !(P.bounds.w > reach));
+            // The LUT's margin must exceed the oracle's tie/rounding reach at the light samples, and
+            // its coplanar reach where the light comes that close to T (the CPU twin's rule).
+            precise double light_near = 2.0LF * P.epsilon.x * scale_hi + P.bounds.x;
+            const bool light_touches = light_distance2 <= light_near * light_near * (1.0LF + 1e-9LF);
+            precise double margin_reach = 2.0LF * (light_touches ? P.epsilon.z : P.epsilon.y) * scale_hi;
+            all_exact = exact && (distance2 <= reach * reach * (1.0LF + 1e-9LF) || !(P.bounds.w > margin_reach));
             const dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
             const double det = penumbraSbsDot(a, penumbraSbsCross(b, c));
             precise double det_bound = 16.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b) * penumbraSbsLength(c);
