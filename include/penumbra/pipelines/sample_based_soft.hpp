@@ -116,7 +116,8 @@ struct SampleBasedSoftCpuResult {
     std::vector<uint32_t> masks;      ///< receivers * words_per_receiver: blocked light samples
     // Device-independent work counters.
     uint64_t pairs = 0;             ///< (receiver, caster) pairs evaluated
-    uint64_t pairs_ignored = 0;     ///< caster ignored for the receiver (coplanar rule for all samples)
+    uint64_t pairs_ignored = 0;     ///< caster ignored for the receiver: the coplanar rule for all samples, or
+                                    ///< p in T's plane with the whole light on one side (T blocks nothing)
     uint64_t pairs_unproven = 0;    ///< Exact: every bit of the pair decided by the oracle's verdict
     uint64_t planes = 0;            ///< plane lookups (per table)
     uint64_t planes_unproven = 0;   ///< Exact: planes whose rounding bound exceeded the tolerance
@@ -220,7 +221,7 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     // So does the squared distance from the light's centre to T (is any light sample within the
     // oracle's coplanar reach of T?).
     std::vector<soft::LocalPlane> support(mode == SoftMode::Brute ? 0 : casters.triangle_count);
-    std::vector<double> light_distance2(support.size());
+    std::vector<double> light_distance2(support.size()), normal_length(support.size()), light_gap(support.size());
     for (size_t t = 0; t < support.size(); ++t) {
         const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
         const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
@@ -228,6 +229,14 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         support[t] = soft::localPlane(frame, v0, v1 - v0, v2 - v0, false, oracle::length3(frame.center) + light_reach,
                                       min_scale, budget);
         light_distance2[t] = detail::pointTriangleDistance2<double>(frame.center, v0, v1, v2);
+        // Distance from T's plane to the nearest light point (<= 0: the light may straddle it).
+        const glm::dvec3 normal = oracle::cross3(v1 - v0, v2 - v0);
+        normal_length[t] = oracle::length3(normal);
+        // (|dot| rounds by <= 4 eps |normal| |centre - v0|: subtracted, then 1e-9 for the rest.)
+        light_gap[t] = normal_length[t] > 0.0
+                           ? (std::fabs(oracle::dot3(normal, frame.center - v0)) / normal_length[t] -
+                              4.0 * soft::kEpsilon * oracle::length3(frame.center - v0)) * (1.0 - 1e-9) - light_reach
+                           : 0.0;
     }
 
     for (size_t r = 0; r < receivers.count; ++r) {
@@ -261,9 +270,9 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
             const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
             const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
-            bool unproven = false;
+            bool unproven = false, near = false;
+            const double distance2 = detail::pointTriangleDistance2<double>(p, v0, v1, v2);
             {
-                const double distance2 = detail::pointTriangleDistance2<double>(p, v0, v1, v2);
                 const double ignore = options.oracle.coplanar_epsilon * scale_lo;
                 if (distance2 < ignore * ignore * (1.0 - 1e-9)) {  // the oracle ignores T for every sample
                     ++result.pairs_ignored;
@@ -276,8 +285,8 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 const double light_near = 2.0 * options.oracle.coplanar_epsilon * scale_hi + light_reach;
                 const bool light_touches = light_distance2[t] <= light_near * light_near * (1.0 + 1e-9);
                 const double margin_reach = 2.0 * (light_touches ? eps : options.oracle.tie_epsilon) * scale_hi;
-                unproven = mode == SoftMode::Exact &&
-                           (distance2 <= reach * reach * (1.0 + 1e-9) || !(margin_world > margin_reach));
+                near = distance2 <= reach * reach * (1.0 + 1e-9);
+                unproven = mode == SoftMode::Exact && (near || !(margin_world > margin_reach));
             }
             // Orientation of the shadow cone: the opposite vertex behind each edge plane; p in front
             // of T's plane. det = (v0 - p) . ((v1 - p) x (v2 - p)) decides both: cross(a, b) . c,
@@ -286,7 +295,24 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             const glm::dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
             const double det = oracle::dot3(a, oracle::cross3(b, c));
             const double det_bound = 16.0 * soft::kEpsilon * oracle::length3(a) * oracle::length3(b) * oracle::length3(c);
-            if (mode == SoftMode::Exact && !(std::fabs(det) > det_bound)) unproven = true;
+            if (!(std::fabs(det) > det_bound)) {
+                // p lies (up to rounding) in T's plane: the edge planes degenerate into T's plane
+                // and det's sign is noise. When the whole light lies on one side of that plane, a
+                // segment from p to a light sample meets the plane only within delta * L / gap of
+                // p (delta: p's distance to the plane, L: |s - p|), outside T when that is below
+                // half p's distance to T (> reach, beyond the oracle's tie reach): T blocks
+                // nothing for p, the oracle's verdict for every sample (receivers on a tessellated
+                // floor against its other triangles).
+                const double delta = (std::fabs(det) + det_bound) / normal_length[t] * (1.0 + 1e-9);
+                const double reach_p = oracle::length3(frame.center - p) + light_reach;
+                const double gap = light_gap[t];
+                if (!near && gap > 0.0 && normal_length[t] > 0.0 &&
+                    (delta * reach_p) * (delta * reach_p) <= 0.25 * gap * gap * distance2) {
+                    ++result.pairs_ignored;
+                    continue;
+                }
+                if (mode == SoftMode::Exact) unproven = true;
+            }
             const bool positive = det > 0.0;
             // Edge planes through p: edge (v0 v1) opposite v2 is spanned by a, b, etc. With det > 0
             // the opposite vertex lies on the positive side of cross(a, b): flip so it is behind.

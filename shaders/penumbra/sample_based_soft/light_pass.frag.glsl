@@ -139,6 +139,14 @@ void main() {
     // ... and so does the squared distance from the light's centre to T (can a light sample come
     // within the oracle's coplanar reach of T?).
     const double light_distance2 = penumbraAfhPointTriangleDistance2(P.center.xyz, v0, v1, v2);
+    // Distance from T's plane to the nearest light point (<= 0: the light may straddle it); the
+    // twin's rounding allowance.
+    const dvec3 normal = penumbraSbsCross(v1 - v0, v2 - v0);
+    const double normal_length = penumbraSbsLength(normal);
+    precise double light_gap = 0.0LF;
+    if (normal_length > 0.0LF)
+        light_gap = (abs(penumbraSbsDot(normal, P.center.xyz - v0)) / normal_length -
+                     4.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(P.center.xyz - v0)) * (1.0LF - 1e-9LF) - P.bounds.x;
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
@@ -167,11 +175,25 @@ void main() {
             precise double light_near = 2.0LF * P.epsilon.x * scale_hi + P.bounds.x;
             const bool light_touches = light_distance2 <= light_near * light_near * (1.0LF + 1e-9LF);
             precise double margin_reach = 2.0LF * (light_touches ? P.epsilon.z : P.epsilon.y) * scale_hi;
-            all_exact = exact && (distance2 <= reach * reach * (1.0LF + 1e-9LF) || !(P.bounds.w > margin_reach));
+            const bool near = distance2 <= reach * reach * (1.0LF + 1e-9LF);
+            all_exact = exact && (near || !(P.bounds.w > margin_reach));
             const dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
             const double det = penumbraSbsDot(a, penumbraSbsCross(b, c));
             precise double det_bound = 16.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b) * penumbraSbsLength(c);
-            if (exact && !(abs(det) > det_bound)) all_exact = true;
+            if (!(abs(det) > det_bound)) {
+                // p in T's plane up to rounding, the whole light on one side: T blocks nothing for p
+                // (the twin's argument: the segment meets the plane within delta * L / gap of p,
+                // outside T).
+                precise double delta = (abs(det) + det_bound) / normal_length * (1.0LF + 1e-9LF);
+                precise double reach_p = penumbraSbsLength(P.center.xyz - p) + P.bounds.x;
+                precise double lhs = (delta * reach_p) * (delta * reach_p);
+                precise double rhs = 0.25LF * light_gap * light_gap * distance2;
+                if (!near && light_gap > 0.0LF && normal_length > 0.0LF && lhs <= rhs) {
+                    ++ignored;
+                    continue;
+                }
+                if (exact) all_exact = true;
+            }
             const bool positive = det > 0.0LF;
             planes[0] = penumbraSbsLocalPlane(p, a, b, positive);
             planes[1] = penumbraSbsLocalPlane(p, b, c, positive);
