@@ -3,11 +3,18 @@
 //
 //   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
-//                [--mode reference|hard] [--reference] [--out FILE.png] [--json] [--no-ground]
+//                [--mode reference|soft|hard] [--reference] [--out FILE.png] [--json] [--no-ground]
+//                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--grid G]
 //
 // Modes
 //   reference (default): every view sample's visibility of N light samples from the exact
 //       double-precision oracle (penumbra/reference/visibility.hpp) on the CPU: soft shadows.
+//   soft: the GPU sample-based soft-shadow pipeline (penumbra/gl/pipelines/sample_based_soft.hpp,
+//       sintorn2008 §4): G-buffer or depth-buffer view samples, K sets of N light samples chosen
+//       per pixel, the light-sample LUT generated on the GPU, influence regions, resolve;
+//       --reference compares every bit with the oracle on the same float view samples and the
+//       same light samples (JSON reference.mismatched_bits, total_bits, ties, visibility_rmse) and
+//       writes <out>_reference.png (the oracle's image) and <out>_error.png (|error| heat map).
 //   hard: the GPU alias-free hard-shadow pipeline (penumbra/pipelines/alias_free_hard.hpp,
 //       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
 //       --reference adds the oracle's verdict for the same samples and light point to the JSON
@@ -26,7 +33,9 @@
 // parseVec3 (as --light-pos does).
 #include <penumbra/bent_normals.hpp>
 #include <penumbra/gl/headless.hpp>
+#include <penumbra/gl/light_lut.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
+#include <penumbra/gl/pipelines/sample_based_soft.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
@@ -53,9 +62,11 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace {
@@ -84,12 +95,17 @@ struct Args {
     bool compare_shading = false;        // also write <out stem>_shading.png: Phong | bent
     uint32_t frames = 1;                 // reference mode: temporal accumulation over F frames
     uint32_t frames_reference = 4096;    // ... against an oracle image with this many samples
+    std::string lut = "exact";           // soft mode: exact | lut | brute (penumbra::SoftMode)
+    uint32_t lut_res = 64;               // soft mode: LUT resolution R (R x R x R texels per table)
+    uint32_t sets = 4;                   // soft mode: K light-sample sets, chosen per pixel
+    uint32_t grid = 256;                 // soft mode: light grid G x G (lists and influence regions)
 };
 
 /// The flags' text as given, before checkArgs turns them into Args values.
 struct RawArgs {
     std::string light_pos, light_radius, samples = "64", width = "512", height = "384", origin;
     std::string frames = "1", frames_reference = "4096";
+    std::string lut_res = "64", sets = "4", grid = "256";
     bool no_ground = false;
 };
 
@@ -110,17 +126,22 @@ struct ModeFlag {
     const char* flag;
     bool reference;  // used by --mode reference
     bool hard;       // used by --mode hard
+    bool soft;       // used by --mode soft
     const char* why_not;
 };
 // --reference in hard mode checks the GPU against the oracle at the light's centre only, so it
 // uses neither the light samples nor the radius.
 const ModeFlag kModeFlags[] = {
-    {"--samples", true, false, "hard shadows use one light point, the light's centre"},
-    {"--light-radius", true, false, "hard shadows use one light point, the light's centre"},
-    {"--reference", false, true, "reference mode is the oracle already"},
-    {"--view-samples", false, true, "reference mode traces exact primary rays on the CPU"},
-    {"--frames", true, false, "temporal accumulation runs on the oracle's soft shadows"},
-    {"--frames-reference", true, false, "temporal accumulation runs on the oracle's soft shadows"},
+    {"--samples", true, false, true, "hard shadows use one light point, the light's centre"},
+    {"--light-radius", true, false, true, "hard shadows use one light point, the light's centre"},
+    {"--reference", false, true, true, "reference mode is the oracle already"},
+    {"--view-samples", false, true, true, "reference mode traces exact primary rays on the CPU"},
+    {"--frames", true, false, false, "temporal accumulation runs on the oracle's soft shadows"},
+    {"--frames-reference", true, false, false, "temporal accumulation runs on the oracle's soft shadows"},
+    {"--lut", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
+    {"--lut-res", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
+    {"--sets", false, false, true, "only the GPU soft-shadow pipeline chooses light-sample sets per pixel"},
+    {"--grid", false, false, true, "only the GPU soft-shadow pipeline has a separate light grid"},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -128,23 +149,28 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
         ->type_name("SCENE")
         ->capture_default_str();
     app.add_option("--light-pos", raw.light_pos, "light centre x,y,z (default: the scene's)")->type_name("X,Y,Z");
-    app.add_option("--light-radius", raw.light_radius, "spherical light radius > 0 (default: the scene's); reference mode")
+    app.add_option("--light-radius", raw.light_radius, "spherical light radius > 0 (default: the scene's); reference and soft modes")
         ->type_name("R");
-    app.add_option("--samples", raw.samples, "light samples per view sample, 1..65536; reference mode")
-        ->type_name("N")
-        ->capture_default_str();
+    app.add_option("--samples", raw.samples,
+                   "light samples per view sample: reference mode 1..65536 (default 64); soft mode a multiple of 32 in "
+                   "32..1024 (default 128)")
+        ->type_name("N");
     app.add_option("--width", raw.width, "image width, 1..16384")->type_name("W")->capture_default_str();
     app.add_option("--height", raw.height, "image height, 1..16384")->type_name("H")->capture_default_str();
-    app.add_option("--mode", a.mode, "reference: oracle soft shadows on the CPU; hard: GPU alias-free hard shadows")
+    app.add_option("--mode", a.mode,
+                   "reference: oracle soft shadows on the CPU; soft: GPU sample-based soft shadows; hard: GPU alias-free "
+                   "hard shadows")
         ->type_name("MODE")
-        ->check(CLI::IsMember({"reference", "hard"}))
+        ->check(CLI::IsMember({"reference", "soft", "hard"}))
         ->capture_default_str();
-    app.add_flag("--reference", a.reference, "hard mode: compare with the oracle (JSON: reference.*)");
+    app.add_flag("--reference", a.reference,
+                 "hard and soft modes: compare with the oracle on the same view samples (and light samples) (JSON: "
+                 "reference.*); soft mode also writes <out>_reference.png and <out>_error.png");
     app.add_option("--out", a.out, "output image (.png); its folder must exist and be writable")
         ->type_name("FILE.png")
         ->capture_default_str();
     app.add_option("--view-samples", a.view_samples,
-                   "hard mode: depth = positions reconstructed from the depth buffer (what an engine has), "
+                   "hard and soft modes: depth = positions reconstructed from the depth buffer (what an engine has), "
                    "exact = the G-buffer's exact surface points")
         ->type_name("depth|exact")
         ->check(CLI::IsMember({"depth", "exact"}))
@@ -167,6 +193,21 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
         ->capture_default_str();
     app.add_option("--frames-reference", raw.frames_reference, "--frames: light samples of the oracle image the RMSE is against")
         ->type_name("N")
+        ->capture_default_str();
+    app.add_option("--lut", a.lut,
+                   "soft mode: exact = certified LUT + exact tests of the bits it cannot vouch for (equals the oracle), "
+                   "lut = the seed's LUT approximation, brute = every light sample tested")
+        ->type_name("exact|lut|brute")
+        ->check(CLI::IsMember({"exact", "lut", "brute"}))
+        ->capture_default_str();
+    app.add_option("--lut-res", raw.lut_res, "soft mode: LUT resolution R, even, 16..256 (R^3 texels per 128 samples)")
+        ->type_name("R")
+        ->capture_default_str();
+    app.add_option("--sets", raw.sets, "soft mode: K light-sample sets, 1..64, chosen per pixel (neighbours differ for K >= 4)")
+        ->type_name("K")
+        ->capture_default_str();
+    app.add_option("--grid", raw.grid, "soft mode: light grid G x G of the sample lists and influence regions, 16..4096")
+        ->type_name("G")
         ->capture_default_str();
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
@@ -222,13 +263,21 @@ void checkOutPath(const std::string& out) {
 }
 
 void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
-    const bool hard = a.mode == "hard";
+    const bool hard = a.mode == "hard", soft = a.mode == "soft";
     a.ground = !raw.no_ground;
     for (const ModeFlag& f : kModeFlags) {
-        if (app.count(f.flag) > 0 && !(hard ? f.hard : f.reference))
+        if (app.count(f.flag) > 0 && !(hard ? f.hard : soft ? f.soft : f.reference))
             usageError(f.flag, " is not used by --mode ", a.mode, " (", f.why_not, ")");
     }
-    a.samples = parseCount(raw.samples, "--samples", 1, 1u << 16);
+    const std::string samples = app.count("--samples") > 0 ? raw.samples : soft ? "128" : "64";
+    a.samples = parseCount(samples, "--samples", 1, 1u << 16);
+    if (soft && (a.samples < 32 || a.samples > 1024 || a.samples % 32 != 0))
+        usageError("--mode soft draws light-sample sets (penumbra/light_samples.hpp): --samples must be a multiple of 32 "
+                   "in [32, 1024], got '", samples, "'");
+    a.lut_res = parseCount(raw.lut_res, "--lut-res", 16, 256);
+    if (a.lut_res % 2 != 0) usageError("--lut-res must be even, got '", raw.lut_res, "'");
+    a.sets = parseCount(raw.sets, "--sets", 1, 64);
+    a.grid = parseCount(raw.grid, "--grid", 16, 4096);
     a.width = parseCount(raw.width, "--width", 1, 16384);
     a.height = parseCount(raw.height, "--height", 1, 16384);
     if (!raw.light_radius.empty()) {
@@ -321,6 +370,19 @@ MemoryEstimate estimateMemory(const Args& args, size_t triangles) {
         m.parts.emplace_back("G-buffer and view samples", 2.0 * 100.0 * pixels + 52.0 * pixels);
         m.parts.emplace_back("sample lists", 2.0 * 40.0 * pixels);
         if (args.reference) m.parts.emplace_back("oracle check", (24.0 + 4.0 + 8.0) * pixels);
+    } else if (args.mode == "soft") {
+        // As hard, plus the masks (N bits per sample, GPU + read-back) and the LUT (K sets x
+        // ceil(N / 128) tables x R^3 uvec4 texels, twice for the certified masks), counted twice
+        // (llvmpipe keeps buffers in host memory; the generator's scratch).
+        const double words = std::ceil(double(args.samples) / 32.0);
+        m.parts.emplace_back("G-buffer and view samples", 2.0 * 100.0 * pixels + 52.0 * pixels);
+        m.parts.emplace_back("sample lists and masks", 2.0 * (40.0 + 8.0 * words) * pixels);
+        if (args.lut != "brute") {
+            const double r = args.lut_res;
+            m.parts.emplace_back("light-sample LUT", 2.0 * double(args.sets) * std::ceil(args.samples / 128.0) * r * r * r *
+                                                         16.0 * (args.lut == "exact" ? 2.0 : 1.0));
+        }
+        if (args.reference) m.parts.emplace_back("oracle masks (blocked + ties)", (24.0 + 2.0 * 4.0 * words) * pixels);
     } else {
         const double words = std::ceil(double(args.samples) / 32.0);
         m.parts.emplace_back("view samples", (8.0 + 24.0 + 4.0 + 24.0 + 24.0) * pixels);
@@ -338,12 +400,13 @@ void checkMemory(const Args& args, size_t triangles) {
     if (physical == 0 || m.total() <= 0.8 * double(physical)) return;
     std::ostringstream out;
     out << args.width << "x" << args.height;
-    if (args.mode == "reference") out << " with " << args.samples << " light samples";
+    if (args.mode != "hard") out << " with " << args.samples << " light samples";
     out << " needs about " << gib(m.total()) << " (";
     for (size_t i = 0; i < m.parts.size(); ++i) out << (i ? ", " : "") << m.parts[i].first << " " << gib(m.parts[i].second);
     out << ") but this machine has " << gib(double(physical))
         << " of memory (sysconf: physical pages; the limit is 80%); use a smaller --width/--height";
-    if (args.mode == "reference") out << " or fewer --samples";
+    if (args.mode != "hard") out << " or fewer --samples";
+    if (args.mode == "soft") out << " (or a smaller --lut-res / --sets)";
     usageError(out.str());
 }
 
@@ -505,11 +568,14 @@ private:
     std::vector<float> l_bend_;
 };
 
-/// <out stem>_shading.png beside `out`.
-std::string shadingComparePath(const std::string& out) {
+/// <out stem><suffix>.png beside `out`.
+std::string siblingPath(const std::string& out, const char* suffix) {
     const fs::path path(out);
-    return (path.parent_path() / (path.stem().string() + "_shading.png")).string();
+    return (path.parent_path() / (path.stem().string() + suffix + ".png")).string();
 }
+
+/// <out stem>_shading.png beside `out`.
+std::string shadingComparePath(const std::string& out) { return siblingPath(out, "_shading"); }
 
 /// Writes the Phong | bent image pair side by side.
 void writeShadingCompare(const std::string& out, const penumbra::scene::ImageRgb8& phong, const penumbra::scene::ImageRgb8& bent) {
@@ -530,45 +596,107 @@ void writeShadingCompare(const std::string& out, const penumbra::scene::ImageRgb
 /// shadowed by the very surface it was reconstructed from (docs/design.md).
 constexpr double kDepthCoplanarEpsilon = 2e-5;
 
+/// The view samples the GPU pipelines get, from one G-buffer pass of the camera: the engine's
+/// depth buffer (positions reconstructed on the GPU) or the G-buffer's exact surface points.
+/// Per pixel, GL's bottom row first (sample id = y * width + x in both inputs).
+struct GpuViewSamples {
+    penumbra::scene::GBuffer gbuffer;
+    penumbra::SampleListsView view;
+    bool depth_input = false;
+    std::vector<glm::vec4> exact_positions;  // the G-buffer's surface points (w = 0: background)
+    std::vector<glm::vec4> faces;            // face normal, w = triangle id (float bits)
+    std::vector<float> shading;              // shading normal, RGBA per pixel
+    std::vector<glm::vec4> positions;        // the very floats the pipeline tests
+    glm::vec3 lo{0.0f}, hi{0.0f};            // box of the surface points
+    size_t count = 0;                        // surface pixels
+    double ms = 0;
+
+    GpuViewSamples(const Args& args, const penumbra::scene::Scene& scene, const penumbra::scene::GpuScene& gpu)
+        : gbuffer(args.width, args.height), depth_input(args.view_samples == "depth") {
+        const auto t0 = std::chrono::steady_clock::now();
+        const uint32_t w = args.width, h = args.height;
+        const glm::mat4 camera = scene.camera.projection(float(w) / float(h)) * scene.camera.view();
+        gbuffer.render(gpu, camera);
+        exact_positions = gbuffer.positionBuffer().download<glm::vec4>();
+        faces = gbuffer.faceBuffer().download<glm::vec4>();
+        shading.resize(size_t(w) * h * 4);
+        glGetTextureImage(gbuffer.shadingNormalTexture(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(shading.size() * 4),
+                          shading.data());
+        view.width = w;
+        view.height = h;
+        view.inverse_view_projection = glm::inverse(camera);
+        positions = exact_positions;
+        if (depth_input) {
+            std::vector<float> depth(size_t(w) * h);
+            glGetTextureImage(gbuffer.depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * 4), depth.data());
+            positions = penumbra::reconstructViewSamples(view, depth.data());
+        }
+        std::tie(lo, hi) = penumbra::viewSampleBounds(exact_positions.data(), exact_positions.size(), &count);
+        glFinish();
+        ms = msSince(t0);
+    }
+    bool surface(size_t pixel) const { return exact_positions[pixel].w != 0.0f; }
+    uint32_t triangle(size_t pixel) const {
+        uint32_t t = 0;
+        std::memcpy(&t, &faces[pixel].w, 4);
+        return t;
+    }
+};
+
+/// Shades the G-buffer's pixels with direct light times `visible` (per pixel; ignored where no
+/// surface): [0] Phong, [1] bent. Rows flipped (GL's bottom row first, PNG's top row first).
+void shadeGpuImages(const GpuViewSamples& v, const MergedScene& merged, const glm::dvec3& light_pos,
+                    const std::vector<float>& visible, penumbra::scene::ImageRgb8 images[2]) {
+    const DirectShading direct(merged, light_pos);
+    const std::vector<uint8_t>& material = merged.material;
+    const uint32_t w = v.view.width, h = v.view.height;
+    for (int b = 0; b < 2; ++b) {
+        images[b].width = w;
+        images[b].height = h;
+        images[b].pixels.assign(size_t(w) * h * 3, 0);
+    }
+    const glm::vec3 albedo[2] = {{0.75f, 0.75f, 0.72f}, {0.85f, 0.45f, 0.2f}};
+    for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            glm::vec3 c[2] = {glm::vec3(0.08f, 0.09f, 0.12f), glm::vec3(0.08f, 0.09f, 0.12f)};
+            if (v.surface(i)) {
+                const uint32_t triangle = v.triangle(i);
+                const glm::vec3 n = glm::normalize(glm::vec3(v.shading[i * 4], v.shading[i * 4 + 1], v.shading[i * 4 + 2]));
+                const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(v.exact_positions[i]));
+                const float lit = std::clamp(visible[i], 0.0f, 1.0f);
+                const bool known = triangle < material.size();
+                for (int bent = 0; bent < 2; ++bent) {
+                    const float light = known ? float(direct.direct(bent == 1, triangle, glm::dvec3(v.exact_positions[i]),
+                                                                    glm::dvec3(n), glm::dvec3(l)))
+                                              : std::max(0.0f, glm::dot(n, l));
+                    c[bent] = albedo[known ? material[triangle] : 1] * (0.12f + 0.88f * light * lit);
+                }
+            }
+            const size_t o = (size_t(h - 1 - y) * w + x) * 3;
+            for (int b = 0; b < 2; ++b)
+                for (int k = 0; k < 3; ++k) images[b].pixels[o + k] = penumbra::scene::linearToSrgb8(c[b][k]);
+        }
+    }
+}
+
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
             const MergedScene& merged, const glm::dvec3& light_pos, double load_ms,
             std::chrono::steady_clock::time_point t_start) {
-    auto t0 = std::chrono::steady_clock::now();
     penumbra::gl::HeadlessContext context;
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height;
-    penumbra::scene::GBuffer gbuffer(w, h);
-    const glm::mat4 camera = scene.camera.projection(float(w) / float(h)) * scene.camera.view();
-    gbuffer.render(gpu, camera);
-    const auto exact_positions = gbuffer.positionBuffer().download<glm::vec4>();
-    const auto faces = gbuffer.faceBuffer().download<glm::vec4>();
-    std::vector<float> shading(size_t(w) * h * 4);
-    glGetTextureImage(gbuffer.shadingNormalTexture(), 0, GL_RGBA, GL_FLOAT, static_cast<GLsizei>(shading.size() * 4),
-                      shading.data());
-    glFinish();
-    const double gbuffer_ms = msSince(t0);
-
-    // The view samples the pipeline gets: the engine's depth buffer (positions reconstructed on the
-    // GPU) or the G-buffer's exact surface points. `positions` = the very floats it tests.
-    const bool depth_input = args.view_samples == "depth";
-    penumbra::SampleListsView view;
-    view.width = w;
-    view.height = h;
-    view.inverse_view_projection = glm::inverse(camera);
-    std::vector<glm::vec4> positions = exact_positions;
-    if (depth_input) {
-        std::vector<float> depth(size_t(w) * h);
-        glGetTextureImage(gbuffer.depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * 4), depth.data());
-        positions = penumbra::reconstructViewSamples(view, depth.data());
-    }
+    const GpuViewSamples v(args, scene, gpu);
+    const double gbuffer_ms = v.ms;
+    const bool depth_input = v.depth_input;
+    const std::vector<glm::vec4>& positions = v.positions;
+    const size_t view_samples = v.count;
 
     // The light must see the view samples: a starting frustum around their box, then §4.3 fitting.
-    size_t view_samples = 0;
-    const auto [lo, hi] = penumbra::viewSampleBounds(exact_positions.data(), exact_positions.size(), &view_samples);
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
-    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
+    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, v.lo, v.hi);
     penumbra::AliasFreeHardOptions options;
     options.grid_width = w;
     options.grid_height = h;
@@ -581,16 +709,17 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
             if (r.closed == (cls == penumbra::CasterClass::Closed)) gpu.draw(r);
         }
     };
+    const penumbra::scene::GBuffer& gbuffer = v.gbuffer;
     const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()},
                                                    {gbuffer.faceBuffer().id(), 0, gbuffer.faceBuffer().size()}};
-    const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), gbuffer.faceTexture(), view};
+    const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), gbuffer.faceTexture(), v.view};
     auto run = [&] {
         return depth_input ? pipeline.run(depth_samples, light, draw) : pipeline.run(buffer_input, w * h, light, draw);
     };
     if (depth_input) pipeline.validate(depth_samples);
     else pipeline.validate(buffer_input, w * h);
     run();  // warm-up
-    t0 = std::chrono::steady_clock::now();
+    auto t0 = std::chrono::steady_clock::now();
     const penumbra::Status status = run();
     glFinish();
     const double shadows_ms = msSince(t0);
@@ -612,46 +741,20 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         vo.coplanar_epsilon = options.coplanar_epsilon;
         const penumbra::reference::HardLight hard_light = penumbra::reference::hardLight(light.light);
         same = penumbra::reference::compareHardStates(oracle, positions, states, hard_light, vo);
-        if (depth_input) true_surface = penumbra::reference::compareHardStates(oracle, exact_positions, states, hard_light, vo);
+        if (depth_input) true_surface = penumbra::reference::compareHardStates(oracle, v.exact_positions, states, hard_light, vo);
         reference_ms = msSince(t0);
     }
-    size_t shadowed = 0;
 
-    // Shade: direct light (bent or Phong) with the hard visibility; rows flipped (GL's bottom row first).
+    // Shade: direct light (bent or Phong) with the hard visibility.
     t0 = std::chrono::steady_clock::now();
-    const DirectShading direct(merged, light_pos);
-    const std::vector<uint8_t>& material = merged.material;
+    size_t shadowed = 0;
+    std::vector<float> visible(states.size());
+    for (size_t i = 0; i < states.size(); ++i) {
+        visible[i] = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
+        shadowed += v.surface(i) && states[i] == PENUMBRA_AFH_SHADOWED;
+    }
     penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
-    for (auto& image : images) {
-        image.width = w;
-        image.height = h;
-        image.pixels.assign(size_t(w) * h * 3, 0);
-    }
-    const glm::vec3 albedo[2] = {{0.75f, 0.75f, 0.72f}, {0.85f, 0.45f, 0.2f}};
-    for (uint32_t y = 0; y < h; ++y) {
-        for (uint32_t x = 0; x < w; ++x) {
-            const size_t i = size_t(y) * w + x;
-            glm::vec3 c[2] = {glm::vec3(0.08f, 0.09f, 0.12f), glm::vec3(0.08f, 0.09f, 0.12f)};
-            if (exact_positions[i].w != 0.0f) {
-                uint32_t triangle = 0;
-                std::memcpy(&triangle, &faces[i].w, 4);
-                const glm::vec3 n = glm::normalize(glm::vec3(shading[i * 4], shading[i * 4 + 1], shading[i * 4 + 2]));
-                const glm::vec3 l = glm::normalize(glm::vec3(light_pos) - glm::vec3(exact_positions[i]));
-                const float lit = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
-                shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
-                const bool known = triangle < material.size();
-                for (int bent = 0; bent < 2; ++bent) {
-                    const float light = known ? float(direct.direct(bent == 1, triangle, glm::dvec3(exact_positions[i]),
-                                                                    glm::dvec3(n), glm::dvec3(l)))
-                                              : std::max(0.0f, glm::dot(n, l));
-                    c[bent] = albedo[known ? material[triangle] : 1] * (0.12f + 0.88f * light * lit);
-                }
-            }
-            const size_t o = (size_t(h - 1 - y) * w + x) * 3;
-            for (int b = 0; b < 2; ++b)
-                for (int k = 0; k < 3; ++k) images[b].pixels[o + k] = penumbra::scene::linearToSrgb8(c[b][k]);
-        }
-    }
+    shadeGpuImages(v, merged, light_pos, visible, images);
     penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
     if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
     const double shade_ms = msSince(t0);
@@ -699,6 +802,312 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                 std::printf("true surface: %zu of %zu disagree (depth reconstruction)\n", true_surface.mismatched,
                             true_surface.samples);
             }
+        }
+    }
+    return 0;
+}
+
+/// Heat map of |a - b| per pixel (visible fractions; rows flipped as the shaded images): black
+/// background, dark grey where they agree exactly, red → yellow → white up to `scale` and beyond.
+void writeErrorPng(const std::string& path, const GpuViewSamples& v, const std::vector<float>& a, const std::vector<float>& b,
+                   float scale) {
+    const uint32_t w = v.view.width, h = v.view.height;
+    penumbra::scene::ImageRgb8 image;
+    image.width = w;
+    image.height = h;
+    image.pixels.assign(size_t(w) * h * 3, 0);
+    for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            glm::vec3 c(0.0f);
+            if (v.surface(i)) {
+                const float e = std::fabs(a[i] - b[i]);
+                if (e == 0.0f) {
+                    c = glm::vec3(0.16f, 0.16f, 0.19f);
+                } else {
+                    const float t = std::min(1.0f, e / scale);  // small errors still show: red from the first bit
+                    c = t < 0.5f ? glm::vec3(0.55f + 0.9f * t, 1.6f * t, 0.0f) : glm::vec3(1.0f, 0.8f + 0.4f * (t - 0.5f), 2.0f * (t - 0.5f));
+                }
+            }
+            const size_t o = (size_t(h - 1 - y) * w + x) * 3;
+            for (int k = 0; k < 3; ++k) image.pixels[o + k] = static_cast<uint8_t>(std::lround(255.0f * std::clamp(c[k], 0.0f, 1.0f)));
+        }
+    }
+    penumbra::scene::writePng(path, image);
+}
+
+// --mode soft: the GPU sample-based soft-shadow pipeline (sintorn2008 §4): view samples from the
+// G-buffer (or the depth buffer), lists, influence regions, LUT masks, resolve.
+int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+            const MergedScene& merged, const glm::dvec3& light_pos, double light_radius, double load_ms,
+            std::chrono::steady_clock::time_point t_start) {
+    penumbra::gl::HeadlessContext context;
+    penumbra::scene::GpuScene gpu(scene);
+    const uint32_t w = args.width, h = args.height, n = args.samples, k = args.sets;
+    const GpuViewSamples v(args, scene, gpu);
+    const penumbra::SoftMode mode = args.lut == "exact" ? penumbra::SoftMode::Exact
+                                    : args.lut == "lut" ? penumbra::SoftMode::Lut
+                                                        : penumbra::SoftMode::Brute;
+
+    // Light samples: K sets of N, one chosen per pixel (penumbra/light_samples.hpp).
+    auto t0 = std::chrono::steady_clock::now();
+    penumbra::Light light;
+    light.center = light_pos;
+    light.size = glm::dvec3(light_radius);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = n;
+    sample_options.sets = k;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    std::vector<uint32_t> pixel_sets(size_t(w) * h);
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) pixel_sets[size_t(y) * w + x] = penumbra::lightSampleSet(x, y, 0, k);
+
+    // The light grid: a frustum from the light centre around the view samples, cropped to them by
+    // the §4.3 fit (the sample-list block's CPU twin, on the very floats the GPU tests: an engine
+    // would take last frame's GPU fit), its far plane just beyond the farthest one. The influence
+    // regions are built on this grid on the host.
+    penumbra::SampleListsLight fit_light;
+    fit_light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
+    fit_light.view_projection = penumbra::lightViewProjectionForBounds(fit_light.light, v.lo, v.hi);
+    penumbra::SampleListsOptions fit_options;
+    fit_options.cull_back_facing = false;  // as the soft pipeline builds its lists
+    fit_options.depth_range = penumbra::LightDepthRange::Unclipped;
+    const penumbra::LightFrustumFit fit = penumbra::fitLightFrustumCpu(
+        penumbra::sampleListsSetup(args.grid, args.grid, w * h), fit_light, v.positions.data(), nullptr, fit_options);
+    const glm::mat4 vp = fit.valid ? fit.view_projection : fit_light.view_projection;
+    double far_depth = 0.0;
+    glm::dvec3 box_lo(std::numeric_limits<double>::infinity()), box_hi(-std::numeric_limits<double>::infinity());
+    for (const glm::vec4& p : v.positions) {
+        if (p.w == 0.0f) continue;
+        far_depth = std::max(far_depth, double((vp * glm::vec4(glm::vec3(p), 1.0f)).w));
+        box_lo = glm::min(box_lo, glm::dvec3(p));
+        box_hi = glm::max(box_hi, glm::dvec3(p));
+    }
+    const auto [scene_lo, scene_hi] = sceneBounds(scene);
+    box_lo = glm::min(box_lo, scene_lo);
+    box_hi = glm::max(box_hi, scene_hi);
+    if (!(far_depth > 0.0)) {
+        std::fprintf(stderr, "soft_shadows: no view sample in front of the light\n");
+        return 1;
+    }
+    penumbra::InfluenceRegionOptions influence_options;
+    influence_options.grid_width = influence_options.grid_height = int(args.grid);
+    influence_options.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, influence_options);
+
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.mode = mode;
+    options.grid_width = options.grid_height = args.grid;
+    options.timings = true;
+    // The coplanar rule of the hard pipeline: above float rounding of surface points (1e-7) or of
+    // positions rebuilt from a 32-bit depth buffer (kDepthCoplanarEpsilon).
+    options.oracle.coplanar_epsilon = v.depth_input ? kDepthCoplanarEpsilon : 1e-7;
+
+    // The LUT (sintorn2008 §4.2), generated on the GPU; certified for Exact, with the tolerance
+    // that lets Exact prove pairs at this coplanar epsilon (sampleBasedSoftLutTolerance).
+    penumbra::LightLutOptions lut_options;
+    lut_options.resolution = args.lut_res;
+    lut_options.certified = mode == penumbra::SoftMode::Exact;
+    if (mode == penumbra::SoftMode::Exact)
+        lut_options.tolerance = penumbra::sampleBasedSoftLutTolerance(options, sets.frame, box_lo, box_hi);
+    std::unique_ptr<penumbra::LightLutSetup> lut;
+    penumbra::gl::Buffer lut_buffer;
+    penumbra::BufferRange lut_table;
+    if (mode != penumbra::SoftMode::Brute) {
+        lut = std::make_unique<penumbra::LightLutSetup>(penumbra::lightLutSetup(sets, lut_options));
+        lut_buffer = penumbra::gl::Buffer(lut->tableBytes());
+        lut_table = {lut_buffer.id(), 0, lut->tableBytes()};
+        penumbra::LightLutGenerator generator;
+        generator.reserve(*lut);
+        generator.validate(*lut, lut_table);
+        if (generator.generate(*lut, lut_table) != penumbra::Status::Ok) {
+            std::fprintf(stderr, "soft_shadows: the LUT generator refused the table\n");
+            return 1;
+        }
+        glFinish();
+    }
+    const double lut_ms = msSince(t0);
+
+    // The pipeline: load time (compile, reserve, validate), then one warm-up and one timed frame.
+    penumbra::SampleBasedSoftShadows pipeline(options, sets, lut.get(), influence, vp);
+    pipeline.reserve(w * h);
+    const penumbra::gl::Buffer sets_buffer = penumbra::gl::Buffer::fromVector(pixel_sets);
+    const penumbra::SbsFrameBuffers frame_buffers{{sets_buffer.id(), 0, sets_buffer.size()}, {}, {}};
+    const penumbra::scene::GBuffer& gbuffer = v.gbuffer;
+    const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
+    const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), 0, v.view};
+    const auto draw = [&] { gpu.draw(); };
+    auto run = [&] {
+        return v.depth_input ? pipeline.run(depth_samples, lut_table, draw, frame_buffers)
+                             : pipeline.run(buffer_input, w * h, lut_table, draw, frame_buffers);
+    };
+    if (v.depth_input) pipeline.validate(depth_samples, lut_table, frame_buffers);
+    else pipeline.validate(buffer_input, w * h, lut_table, frame_buffers);
+    std::fprintf(stderr, "soft_shadows: GPU soft shadows (%s, N = %u, %u x %u samples, grid %u^2)...\n", args.lut.c_str(), n, w,
+                 h, args.grid);
+    run();  // warm-up
+    t0 = std::chrono::steady_clock::now();
+    const penumbra::Status status = run();
+    glFinish();
+    const double shadows_ms = msSince(t0);
+    if (status != penumbra::Status::Ok) {
+        std::fprintf(stderr, "soft_shadows: the soft-shadow pipeline returned '%s'\n", penumbra::statusName(status));
+        return 1;
+    }
+    const penumbra::SampleBasedSoftFrame frame = pipeline.readFrame();
+    const std::vector<float> gpu_visibility = pipeline.readVisibility();
+    const uint32_t words = pipeline.wordsPerSample();
+    // GL_TIME_ELAPSED per stage: trusted where the stages add up to a plausible share of the wall
+    // time (llvmpipe answers with values that are not a measurement).
+    const double stage_ms[3] = {frame.lists_ns * 1e-6, frame.light_pass_ns * 1e-6, frame.resolve_ns * 1e-6};
+    const double stages_ms = stage_ms[0] + stage_ms[1] + stage_ms[2];
+    const bool timers_measure = stages_ms >= 0.05 * shadows_ms && stages_ms <= 1.5 * shadows_ms;
+
+    // Per pixel visible fraction (untested samples: lit, counted).
+    size_t untested = 0, tested = 0;
+    std::vector<float> visible(size_t(w) * h, 1.0f);
+    double visible_sum = 0;
+    for (size_t i = 0; i < visible.size(); ++i) {
+        if (!v.surface(i)) continue;
+        if (gpu_visibility[i] < 0.0f) {
+            ++untested;
+            continue;
+        }
+        ++tested;
+        visible[i] = gpu_visibility[i];
+        visible_sum += visible[i];
+    }
+
+    // --reference: the oracle on the same float view samples, each with the same light-sample set
+    // (grouped by set), bit by bit; ties apart.
+    Json reference_json;
+    std::vector<float> oracle_visible;
+    double reference_ms = 0;
+    if (args.reference) {
+        t0 = std::chrono::steady_clock::now();
+        const std::vector<uint32_t> masks = pipeline.readMasks();
+        penumbra::reference::VisibilityOptions vo;
+        vo.coplanar_epsilon = options.oracle.coplanar_epsilon;
+        vo.tie_epsilon = options.oracle.tie_epsilon;
+        oracle_visible = visible;
+        uint64_t total_bits = 0, ties = 0, mismatched = 0, mismatched_samples = 0, compared = 0;
+        double squares = 0;
+        for (uint32_t s = 0; s < k; ++s) {
+            std::vector<size_t> members;
+            std::vector<glm::dvec3> points;
+            for (size_t i = 0; i < visible.size(); ++i) {
+                if (!v.surface(i) || gpu_visibility[i] < 0.0f || pixel_sets[i] != s || v.positions[i].w == 0.0f) continue;
+                members.push_back(i);
+                points.emplace_back(v.positions[i]);
+            }
+            if (members.empty()) continue;
+            const std::string what = "oracle check, set " + std::to_string(s + 1) + " of " + std::to_string(k);
+            const std::vector<glm::dvec3> samples(sets.worldSet(s), sets.worldSet(s) + n);
+            const penumbra::reference::VisibilityResult truth = evaluateWithProgress(oracle, points, samples, vo, what.c_str());
+            for (size_t m = 0; m < members.size(); ++m) {
+                const size_t i = members[m];
+                uint64_t wrong = 0;
+                for (uint32_t b = 0; b < n; ++b) {
+                    ++total_bits;
+                    if (truth.isTie(m, b)) {
+                        ++ties;
+                        continue;
+                    }
+                    wrong += ((masks[i * words + b / 32] >> (b % 32)) & 1u) != uint32_t(truth.isBlocked(m, b));
+                }
+                mismatched += wrong;
+                mismatched_samples += wrong > 0;
+                oracle_visible[i] = float(truth.visibleFraction(m));
+                const double e = double(visible[i]) - truth.visibleFraction(m);
+                squares += e * e;
+                ++compared;
+            }
+        }
+        reference_ms = msSince(t0);
+        const float error_scale = 0.1f;
+        penumbra::scene::ImageRgb8 reference_images[2];
+        shadeGpuImages(v, merged, light_pos, oracle_visible, reference_images);
+        penumbra::scene::writePng(siblingPath(args.out, "_reference"), reference_images[args.shading == "bent" ? 1 : 0]);
+        writeErrorPng(siblingPath(args.out, "_error"), v, visible, oracle_visible, error_scale);
+        reference_json = {{"mismatched_bits", mismatched},
+                          {"total_bits", total_bits},
+                          {"ties", ties},
+                          {"visibility_rmse", compared ? std::sqrt(squares / double(compared)) : 0.0},
+                          {"view_samples", compared},
+                          {"mismatched_view_samples", mismatched_samples},
+                          {"png", siblingPath(args.out, "_reference")},
+                          {"error_png", siblingPath(args.out, "_error")},
+                          {"error_png_scale", error_scale}};
+    }
+
+    t0 = std::chrono::steady_clock::now();
+    penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
+    shadeGpuImages(v, merged, light_pos, visible, images);
+    penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
+    if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
+    const double shade_ms = msSince(t0);
+    const double total_ms = msSince(t_start);
+    const uint64_t pair_bits = frame.pairs * n;
+    if (args.json) {
+        Json j = reportHead(args, "soft");
+        j["renderer"] = context.renderer();
+        j["width"] = w;
+        j["height"] = h;
+        j["triangles"] = oracle.triangleCount();
+        j["view_samples"] = v.count;
+        j["light_samples"] = n;
+        j["light_sample_sets"] = k;
+        j["light"] = {{"position", vec3Json(light_pos)}, {"radius", light_radius}};
+        j["mean_visible_fraction"] = tested ? visible_sum / double(tested) : 0.0;
+        j["soft"] = {{"lut", args.lut},
+                     {"lut_res", args.lut_res},
+                     {"lut_tolerance", lut_options.tolerance},
+                     {"lut_bytes", lut ? lut->tableBytes() : 0},
+                     {"grid", args.grid},
+                     {"view_samples", args.view_samples},
+                     {"coplanar_epsilon", options.oracle.coplanar_epsilon},
+                     {"tested", tested},
+                     {"untested", untested},
+                     {"passes", frame.passes},
+                     {"max_list_length", frame.statistics.max_list_length},
+                     {"occupancy", frame.statistics.occupancy()},
+                     {"fragments", frame.fragments},
+                     {"pairs", frame.pairs},
+                     {"pairs_ignored", frame.pairs_ignored},
+                     {"pairs_unproven", frame.pairs_unproven},
+                     {"uncertain_bits", frame.uncertain_bits},
+                     {"uncertain_fraction", pair_bits ? double(frame.uncertain_bits) / double(pair_bits) : 0.0},
+                     {"exact_tests", frame.exact_tests},
+                     {"overflow", frame.overflow}};
+        if (args.reference) j["reference"] = reference_json;
+        j["timings_ms"] = {{"load", load_ms},
+                           {"gbuffer", v.ms},
+                           {"light_samples_and_lut", lut_ms},
+                           {"shadows", shadows_ms},
+                           {"gpu_timer", timers_measure ? "GL_TIME_ELAPSED" : "unmeasured"},
+                           {"lists", stage_ms[0]},
+                           {"light_pass", stage_ms[1]},
+                           {"resolve", stage_ms[2]},
+                           {"reference", reference_ms},
+                           {"shade_and_write", shade_ms},
+                           {"total", total_ms}};
+        j["out"] = args.out;
+        if (args.compare_shading) j["shading_compare"] = shadingComparePath(args.out);
+        printReport(j);
+    } else {
+        std::printf("%s (soft %s, N = %u, %s): %zu triangles, %zu view samples, %.1f ms shadows", args.scene.c_str(),
+                    args.lut.c_str(), n, context.renderer().c_str(), oracle.triangleCount(), v.count, shadows_ms);
+        if (timers_measure) {
+            std::printf(" (lists %.2f, light pass %.2f, resolve %.2f ms)", stage_ms[0], stage_ms[1], stage_ms[2]);
+        } else {
+            std::printf(" (per-stage GPU timers not measured by this driver)");
+        }
+        std::printf(" -> %s\n", args.out.c_str());
+        if (args.reference) {
+            std::printf("reference: %s mismatched bits of %s, %s ties, visibility RMSE %.3g -> %s, %s\n",
+                        reference_json["mismatched_bits"].dump().c_str(), reference_json["total_bits"].dump().c_str(),
+                        reference_json["ties"].dump().c_str(), reference_json["visibility_rmse"].get<double>(),
+                        siblingPath(args.out, "_reference").c_str(), siblingPath(args.out, "_error").c_str());
         }
     }
     return 0;
@@ -925,6 +1334,8 @@ int main(int argc, char** argv) {
     app.footer("Modes:\n"
                "  reference  every pixel's visibility of --samples light samples (a spherical light) from the exact\n"
                "             double-precision oracle on the CPU: soft shadows\n"
+               "  soft       the GPU sample-based soft-shadow pipeline (lists, influence regions, light-sample LUT);\n"
+               "             --reference compares every bit with the oracle and writes <out>_reference.png, <out>_error.png\n"
                "  hard       the GPU alias-free hard-shadow pipeline from the light's centre on a headless GL context\n"
                "             (PENUMBRA_GL=egl|osmesa); --reference adds the oracle's verdict on the same samples\n"
                "Built-in scenes: torus_knot columns hairball grass. Progress of long phases goes to stderr.\n"
@@ -947,13 +1358,14 @@ int main(int argc, char** argv) {
         glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
         applyOrigin(scene, args.origin, light_pos);
         const double light_radius = args.light_radius > 0 ? args.light_radius : double(scene.light.radius);
-        if (args.mode == "reference") checkLight(scene, light_pos, light_radius);
+        if (args.mode != "hard") checkLight(scene, light_pos, light_radius);
         checkMemory(args, scene.triangleCount());
 
         const MergedScene merged = merge(scene);
         const penumbra::reference::VisibilityOracle oracle(merged.positions, merged.indices);
         const double load_ms = msSince(t0);
         if (args.mode == "hard") return runHard(args, scene, oracle, merged, light_pos, load_ms, t_start);
+        if (args.mode == "soft") return runSoft(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
         return runReference(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
     } catch (const UsageError& e) {
         std::fprintf(stderr, "soft_shadows: %s\n(soft_shadows --help lists the options)\n", e.what.c_str());
