@@ -7,6 +7,7 @@
 
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <random>
 
 using glm::dvec3;
@@ -180,4 +181,92 @@ TEST_CASE("sample-based soft (CPU twin): bad input") {
     CHECK(brute.blockedCount(0) > 0);
     CHECK(brute.blockedCount(0) < 64);
     CHECK(std::abs(int(lut_result.blockedCount(0)) - int(brute.blockedCount(0))) <= 4);
+}
+
+TEST_CASE("sample-based soft (CPU twin): depth-input epsilon, receivers in a tessellated floor's plane") {
+    // A floor of 8 x 8 quads (128 coplanar triangles) under a tilted triangle, receivers on the floor
+    // nudged off it by up to ~1e-6 (as positions rebuilt from a depth buffer are), and the coplanar
+    // epsilon the demo uses for depth input (2e-5) on both sides. Every floor triangle is a caster
+    // of every floor receiver here (the twin has no influence regions): with p in their plane
+    // (det ~ 0) those pairs were decided sample by sample; the light lies above the floor, so they
+    // are now proven to block nothing. Exact must still equal the oracle bit for bit.
+    const uint32_t seed = penumbra::test::testSeed();
+    penumbra::scene::Mesh floor = penumbra::scene::groundPlane(2.0f, 0.0f, 8);
+    penumbra::scene::Mesh mesh = floor;
+    const uint32_t base = uint32_t(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), {{-0.4f, 0.6f, -0.3f}, {0.5f, 0.8f, -0.2f}, {0.0f, 0.7f, 0.6f}});
+    mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2});
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    std::vector<glm::vec3> points;
+    for (int i = 0; i < 300; ++i) points.emplace_back(1.5f * unit(rng), (i % 3 == 0 ? 1e-6f : 0.0f) * unit(rng), 1.5f * unit(rng));
+
+    penumbra::Light light;
+    light.center = dvec3(0.3, 3.0, 0.2);
+    light.size = dvec3(0.4);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 128;
+    sample_options.sets = 1;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+
+    penumbra::SampleBasedSoftGpuOptions gpu_options;
+    gpu_options.grid_width = gpu_options.grid_height = 64;
+    gpu_options.oracle.coplanar_epsilon = 2e-5;
+    penumbra::LightLutOptions lut_options;
+    lut_options.resolution = 32;
+    lut_options.certified = true;
+    lut_options.tolerance = penumbra::sampleBasedSoftLutTolerance(gpu_options, sets.frame, dvec3(-2, 0, -2), dvec3(2, 0.8, 2));
+    CHECK(lut_options.tolerance == 1e-6);  // the oracle's tie epsilon (1e-9) needs no more at this scale
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
+    const std::vector<uint32_t> words = penumbra::generateLightLut(lut);
+
+    penumbra::SampleBasedSoftOptions options;
+    options.mode = penumbra::SoftMode::Exact;
+    options.oracle.coplanar_epsilon = 2e-5;
+    const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(), mesh.triangleCount()};
+    const penumbra::SoftReceivers receivers{points.data(), points.size(), nullptr};
+    const penumbra::SampleBasedSoftCpuResult exact = penumbra::sampleBasedSoftCpu(sets, &lut, words.data(), casters, receivers, options);
+
+    std::vector<dvec3> positions(mesh.positions.begin(), mesh.positions.end());
+    const penumbra::reference::VisibilityOracle oracle(positions, mesh.indices);
+    penumbra::reference::VisibilityOptions oracle_options;
+    oracle_options.coplanar_epsilon = 2e-5;
+    const penumbra::reference::VisibilityResult truth = oracle.evaluate(
+        std::vector<dvec3>(points.begin(), points.end()), std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128), oracle_options);
+    const Tally e = compare(exact, truth);
+    uint64_t blocked = 0;
+    for (size_t r = 0; r < points.size(); ++r) blocked += truth.blockedCount(r);
+    MESSAGE("floor: " << e.bits << " bits, " << blocked << " blocked, " << e.ties << " ties, exact mismatched " << e.mismatched
+                      << "; pairs " << exact.pairs << ", ignored " << exact.pairs_ignored << ", unproven " << exact.pairs_unproven
+                      << ", exact tests " << exact.exact_tests);
+    CHECK(blocked > 0);
+    CHECK(e.mismatched == 0);
+    // The 200 receivers exactly in the floor's plane: every floor triangle is ignored (its own by
+    // the coplanar rule, the others proven to block nothing); the 100 nudged ones (det above its
+    // rounding bound) go through the LUT. Nothing is left to per-sample tests but the few pairs
+    // within the coplanar reach.
+    CHECK(exact.pairs_ignored >= 200 * 128);
+    CHECK(exact.pairs_unproven < points.size() * 4);
+}
+
+TEST_CASE("sample-based soft: sampleBasedSoftLutTolerance") {
+    penumbra::Light light;
+    light.center = dvec3(0, 4, 0);
+    light.size = dvec3(0.25);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 32;
+    sample_options.sets = 1;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    penumbra::SampleBasedSoftGpuOptions o;
+    o.grid_width = o.grid_height = 16;
+    CHECK(penumbra::sampleBasedSoftLutTolerance(o, sets.frame, dvec3(-1), dvec3(1)) == 1e-6);  // default floor
+    // A large tie epsilon needs a proportionally larger margin: 1.25 * 2 * tie * s / (budget * r),
+    // s = max(box extent 2, farthest corner from the centre 5 + reach 0.25 sqrt 3).
+    o.oracle.tie_epsilon = 1e-6;
+    const double s = 5.0 + 0.25 * std::sqrt(3.0);
+    const double want = 1.25 * 2.0 * 1e-6 * s / (0.25 * 0.25);
+    CHECK(penumbra::sampleBasedSoftLutTolerance(o, sets.frame, dvec3(-1), dvec3(1)) == doctest::Approx(want).epsilon(1e-12));
+    CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftLutTolerance(o, sets.frame, dvec3(1), dvec3(-1)); }), "ordered"));
+    CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftLutTolerance(o, sets.frame, dvec3(std::nan("")), dvec3(1)); }),
+                   "finite"));
 }
