@@ -94,6 +94,9 @@ Tally compareOracle(const std::vector<uint32_t>& masks, uint32_t words, const st
     return t;
 }
 
+/// Rotation steps about the light's local z in the scene checks (sintorn2008 §4.2's jitter).
+constexpr uint32_t kRotations = 4;
+
 struct Case {
     std::string name;
     penumbra::scene::Scene scene;
@@ -129,10 +132,12 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
             const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(lut_words);
             const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
 
-            // Receivers on the surfaces; half of them use set 1 (the per-pixel set choice).
+            // Receivers on the surfaces; half of them use set 1 and each one of 4 rotation steps (the
+            // per-pixel choice of sampleBasedSoftSelection): selection word set | step << 8.
             const std::vector<glm::vec3> points = surfacePoints(mesh, receiver_count, seed + n);
             std::vector<uint32_t> receiver_sets(points.size());
-            for (size_t r = 0; r < points.size(); ++r) receiver_sets[r] = uint32_t(r & 1u);
+            for (size_t r = 0; r < points.size(); ++r) receiver_sets[r] = uint32_t(r & 1u) | uint32_t((r >> 1) & 3u) << 8;
+            const std::vector<glm::dvec4> table = penumbra::sampleBasedSoftSampleTable(sets, kRotations);
             std::vector<glm::vec4> positions4;
             for (const auto& p : points) positions4.emplace_back(p, 1.0f);
             const penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(positions4);
@@ -158,18 +163,24 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
             // The oracle's defaults (tie and coplanar 1e-9), on both sides. (With the hard pipeline's
             // 1e-7 the oracle's coplanar reach exceeds the LUT's margin at tolerance 1e-6: every pair
             // is then decided sample by sample; still exact, as fast as brute.)
-            std::vector<dvec3> receivers_by_set[2];
-            for (size_t r = 0; r < points.size(); ++r) receivers_by_set[r & 1].push_back(dvec3(points[r]));
-            penumbra::reference::VisibilityResult truth_by_set[2];
-            for (uint32_t s = 0; s < 2; ++s)
-                truth_by_set[s] = oracle.evaluate(receivers_by_set[s], std::vector<dvec3>(sets.worldSet(s), sets.worldSet(s) + n),
-                                                  oracle_options);
+            // Group g = set * R + step: receivers r with (r & 1, (r >> 1) & 3) = (set, step).
+            const uint32_t groups = 2 * kRotations;
+            auto groupOf = [&](size_t r) { return uint32_t(r & 1u) * kRotations + uint32_t((r >> 1) & 3u); };
+            std::vector<std::vector<dvec3>> receivers_by_group(groups);
+            for (size_t r = 0; r < points.size(); ++r) receivers_by_group[groupOf(r)].push_back(dvec3(points[r]));
+            std::vector<penumbra::reference::VisibilityResult> truth_by_group(groups);
+            for (uint32_t g = 0; g < groups; ++g) {
+                std::vector<dvec3> samples;
+                for (uint32_t i = 0; i < n; ++i) samples.emplace_back(table[size_t(g) * n + i]);
+                truth_by_group[g] = oracle.evaluate(receivers_by_group[g], samples, oracle_options);
+            }
             const uint32_t words = (n + 31) / 32;
 
             // CPU twin (Lut) for the bit comparison.
             penumbra::SampleBasedSoftOptions twin_options;
             twin_options.mode = penumbra::SoftMode::Lut;
             twin_options.oracle = oracle_options;
+            twin_options.rotations = kRotations;
             const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(),
                                                 mesh.triangleCount()};
             const penumbra::SoftReceivers receivers{points.data(), points.size(), receiver_sets.data()};
@@ -184,6 +195,7 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
                 options.mode = mode;
                 options.grid_width = options.grid_height = 64;
                 options.oracle = oracle_options;
+                options.rotations = kRotations;
                 penumbra::SampleBasedSoftShadows pipeline(options, sets, mode == penumbra::SoftMode::Brute ? nullptr : &lut,
                                                           influence, vp);
                 pipeline.reserve(uint32_t(points.size()));
@@ -198,19 +210,20 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
                 // Per set: the oracle's receivers are the GPU's ids r with r & 1 == set.
                 Tally total;
                 uint64_t blocked = 0, visibility_errors = 0;
-                for (uint32_t s = 0; s < 2; ++s) {
+                for (uint32_t g = 0; g < groups; ++g) {
                     std::vector<uint32_t> sub_masks;
                     std::vector<float> sub_visibility;
-                    for (size_t r = s; r < points.size(); r += 2) {
+                    for (size_t r = 0; r < points.size(); ++r) {
+                        if (groupOf(r) != g) continue;
                         sub_masks.insert(sub_masks.end(), masks.begin() + r * words, masks.begin() + (r + 1) * words);
                         sub_visibility.push_back(visibility[r]);
                     }
-                    const Tally t = compareOracle(sub_masks, words, sub_visibility, truth_by_set[s]);
+                    const Tally t = compareOracle(sub_masks, words, sub_visibility, truth_by_group[g]);
                     total.bits += t.bits;
                     total.ties += t.ties;
                     total.mismatched += t.mismatched;
                     total.untested += t.untested;
-                    for (size_t i = 0; i < truth_by_set[s].receivers; ++i) blocked += truth_by_set[s].blockedCount(i);
+                    for (size_t i = 0; i < truth_by_group[g].receivers; ++i) blocked += truth_by_group[g].blockedCount(i);
                 }
                 for (size_t r = 0; r < points.size(); ++r) {
                     uint32_t pop = 0;

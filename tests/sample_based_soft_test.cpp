@@ -93,15 +93,38 @@ void equalsOracle(bool stress) {
             const std::vector<glm::vec3> points = surfacePoints(mesh, receiver_count, seed + n);
             const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(),
                                                 mesh.triangleCount()};
-            const penumbra::SoftReceivers receivers{points.data(), points.size(), nullptr};
+            // Receiver r uses rotation step r % 4 of 4 (sintorn2008 §4.2's per-pixel jitter); the
+            // oracle gets each receiver's rotated samples (sampleBasedSoftSampleTable).
+            constexpr uint32_t kRotations = 4;
+            std::vector<uint32_t> selection(points.size());
+            for (size_t r = 0; r < points.size(); ++r) selection[r] = uint32_t(r % kRotations) << 8;
+            const penumbra::SoftReceivers receivers{points.data(), points.size(), selection.data()};
 
             std::vector<dvec3> positions(mesh.positions.begin(), mesh.positions.end());
             const penumbra::reference::VisibilityOracle oracle(positions, mesh.indices);
-            const std::vector<dvec3> receivers_d(points.begin(), points.end());
-            const std::vector<dvec3> samples(sets.worldSet(0), sets.worldSet(0) + n);
-            const penumbra::reference::VisibilityResult truth = oracle.evaluate(receivers_d, samples);
+            const std::vector<glm::dvec4> table = penumbra::sampleBasedSoftSampleTable(sets, kRotations);
+            // The oracle per rotation step, scattered back into receiver order.
+            penumbra::reference::VisibilityResult truth;
+            truth.receivers = points.size();
+            truth.samples = n;
+            truth.words_per_receiver = (n + 31) / 32;
+            truth.blocked.assign(points.size() * truth.words_per_receiver, 0u);
+            truth.ties = truth.blocked;
+            for (uint32_t step = 0; step < kRotations; ++step) {
+                std::vector<dvec3> group, samples;
+                for (size_t r = step; r < points.size(); r += kRotations) group.emplace_back(points[r]);
+                for (uint32_t i = 0; i < n; ++i) samples.emplace_back(table[size_t(step) * n + i]);
+                const penumbra::reference::VisibilityResult part = oracle.evaluate(group, samples);
+                for (size_t g = 0; g < group.size(); ++g)
+                    for (uint32_t w = 0; w < truth.words_per_receiver; ++w) {
+                        const size_t r = step + g * kRotations;
+                        truth.blocked[r * truth.words_per_receiver + w] = part.blocked[g * part.words_per_receiver + w];
+                        truth.ties[r * truth.words_per_receiver + w] = part.ties[g * part.words_per_receiver + w];
+                    }
+            }
 
             penumbra::SampleBasedSoftOptions options;
+            options.rotations = kRotations;
             options.mode = penumbra::SoftMode::Exact;
             const penumbra::SampleBasedSoftCpuResult exact = penumbra::sampleBasedSoftCpu(sets, &lut, words.data(), casters,
                                                                                           receivers, options);
@@ -169,6 +192,28 @@ TEST_CASE("sample-based soft (CPU twin): bad input") {
     const penumbra::SoftReceivers bad_receivers{points.data(), 1, &bad_set};
     CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftCpu(sets, &seed_lut, words.data(), casters, bad_receivers, options); }),
                    "uses set 2 of 2"));
+    const uint32_t bad_step = 1u << 8;  // rotation step 1 of 1
+    const penumbra::SoftReceivers bad_rotation{points.data(), 1, &bad_step};
+    CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftCpu(sets, &seed_lut, words.data(), casters, bad_rotation, options); }),
+                   "rotation step 1 of 1"));
+    options.rotations = 300;
+    CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftCpu(sets, &seed_lut, words.data(), casters, receivers, options); }),
+                   "rotations = 300"));
+    options.rotations = 1;
+    {
+        penumbra::Light rectangle = light;  // not symmetric about local z: rotation steps refused
+        rectangle.shape = penumbra::LightShape::Rectangle;
+        rectangle.size = dvec3(0.4, 0.2, 0.0);
+        const penumbra::LightSampleSets rect_sets = penumbra::makeLightSampleSets(rectangle, sample_options);
+        CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftSampleTable(rect_sets, 4); }), "symmetric"));
+        CHECK(penumbra::sampleBasedSoftSampleTable(rect_sets, 1).size() == size_t(2) * 64 + 1);
+        // Step 0 is the sets' world samples bit for bit; other steps rotate them about local z.
+        const std::vector<glm::dvec4> t = penumbra::sampleBasedSoftSampleTable(sets, 4);
+        CHECK(glm::dvec3(t[5]) == sets.worldSet(0)[5]);
+        CHECK(glm::dvec3(t[64 + 5]) != sets.worldSet(0)[5]);
+        CHECK(std::abs(glm::length(glm::dvec3(t[64 + 5]) - light.center) - glm::length(sets.worldSet(0)[5] - light.center)) < 1e-12);
+        CHECK(t[size_t(2) * 4 * 64 + 1].x == doctest::Approx(0.0).epsilon(1e-15));  // cos(1/4 turn)
+    }
     sample_options.count = 128;
     const penumbra::LightSampleSets other = penumbra::makeLightSampleSets(light, sample_options);
     CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftCpu(other, &seed_lut, words.data(), casters, receivers, options); }),

@@ -44,7 +44,7 @@
 // blocks, the oracle's epsilons, plane budget, work counters, timers) and its validation,
 // sampleBasedSoftParams() (the light pass's PenumbraSbsParams block: light frame, bounds, budget,
 // epsilons, grid, LUT params; shaders/penumbra/sample_based_soft/sample_based_soft_shared.h) and
-// sampleBasedSoftWorldSamples() (the fp64 world samples the exact test reads). The executor is
+// sampleBasedSoftSampleTable() (the fp64 world samples the exact test reads). The executor is
 // penumbra/gl/pipelines/sample_based_soft.hpp; its fragment stage runs this twin's per-pair steps
 // in fp64 (light_pass.frag.glsl), except that it looks the planes up in float (the twin: double)
 // and proves them against plane_budget (0.25 of the tolerance; the twin: 0.5). Exact and Brute
@@ -93,6 +93,11 @@ struct SampleBasedSoftOptions {
     /// The oracle's tie and coplanar tolerances (rules 2 and 3 of reference/visibility.hpp): Exact
     /// and Brute decide uncertain pairs with exactly these. threads is ignored.
     reference::VisibilityOptions oracle{};
+    /// R rotation steps about the light's local z (1 = none; 1..256; R > 1 needs a light symmetric
+    /// about it, LightFrame::symmetric): a receiver's selection word picks step r, and its light
+    /// samples are its set's rotated by r / R turns (sintorn2008 §4.2's per-pixel jitter). The
+    /// oracle's samples are sampleBasedSoftSampleTable's.
+    uint32_t rotations = 1;
 };
 
 /// Casters: indexed triangles (float positions, as the GPU sees them).
@@ -103,13 +108,64 @@ struct SoftCasters {
     size_t triangle_count = 0;
 };
 
-/// Receivers (view samples): float positions and, optionally, the light-sample set of each
-/// (lightSampleSet(x, y, frame, K) per pixel); null = set 0 for all.
+/// Receivers (view samples): float positions and, optionally, the selection word of each
+/// (sampleBasedSoftSelection per pixel: bits 0-7 the light-sample set, bits 8-15 the rotation
+/// step); null = set 0, no rotation for all.
 struct SoftReceivers {
     const glm::vec3* positions = nullptr;
     size_t count = 0;
     const uint32_t* sets = nullptr;
 };
+
+/// The selection word of a view sample (what SoftReceivers::sets and the GPU pipeline's per-sample
+/// buffer hold): set lightSampleSet(x, y, frame, K) in bits 0-7, and with R > 1 rotation steps the
+/// step floor(lightSampleRotationHash(x, y, frame, seed) * R / 2^32) in bits 8-15 (sintorn2008
+/// §4.2: neighbours get other sets and other rotations; temporal jitter by frame).
+inline uint32_t sampleBasedSoftSelection(uint32_t x, uint32_t y, uint32_t frame, uint32_t sets, uint32_t rotations,
+                                         uint32_t seed = 0) {
+    const uint32_t set = lightSampleSet(x, y, frame, sets);
+    const uint32_t step =
+        rotations > 1 ? static_cast<uint32_t>((uint64_t(lightSampleRotationHash(x, y, frame, seed)) * rotations) >> 32) : 0u;
+    return set | (step << 8);
+}
+
+/// The light samples of every (set, rotation step) in world space, as the GPU reads them and the
+/// oracle must get them: dvec4 (xyz, 0), index (set * R + step) * N + i; step 0 is
+/// LightSampleSets::world bit for bit, step r the local sample rotated by r / R turns about local z
+/// (cos/sin from the library-independent cosSinTurns, products unfused) then LightFrame::toWorld.
+/// Then R entries (cos, sin, 0, 0) of the steps. Throws when R is outside 1..256 or R > 1 for a
+/// light that is not symmetric about its local z.
+inline std::vector<glm::dvec4> sampleBasedSoftSampleTable(const LightSampleSets& sets, uint32_t rotations) {
+    PENUMBRA_CHECK(rotations >= 1 && rotations <= 256, "penumbra::sampleBasedSoftSampleTable: rotations = ", rotations,
+                   " must be in [1, 256]");
+    PENUMBRA_CHECK(rotations == 1 || sets.frame.symmetric, "penumbra::sampleBasedSoftSampleTable: rotations = ", rotations,
+                   " needs a light symmetric about its local z axis (sphere, disk, ellipsoid with equal x and y); "
+                   "this one is not: use 1");
+    const uint32_t n = sets.count(), k = sets.sets();
+    std::vector<glm::dvec2> steps(rotations);
+    for (uint32_t r = 0; r < rotations; ++r) {
+        double c = 1.0, sn = 0.0;
+        if (r) detail::light_samples::cosSinTurns(double(r) / double(rotations), c, sn);
+        steps[r] = glm::dvec2(c, sn);
+    }
+    std::vector<glm::dvec4> out;
+    out.reserve(size_t(n) * k * rotations + rotations);
+    for (uint32_t s = 0; s < k; ++s)
+        for (uint32_t r = 0; r < rotations; ++r)
+            for (uint32_t i = 0; i < n; ++i) {
+                if (r == 0) {
+                    out.emplace_back(sets.worldSet(s)[i], 0.0);
+                    continue;
+                }
+                const glm::dvec3 q = sets.local[size_t(s) * n + i];
+                const double c = steps[r].x, sn = steps[r].y;
+                const glm::dvec3 rotated(detail::mulRounded(c, q.x) - detail::mulRounded(sn, q.y),
+                                         detail::mulRounded(sn, q.x) + detail::mulRounded(c, q.y), q.z);
+                out.emplace_back(sets.frame.toWorld(rotated), 0.0);
+            }
+    for (uint32_t r = 0; r < rotations; ++r) out.emplace_back(steps[r], 0.0, 0.0);
+    return out;
+}
 
 struct SampleBasedSoftCpuResult {
     uint32_t words_per_receiver = 0;  ///< ceil(N / 32)
@@ -150,7 +206,7 @@ inline double maxAbs3(const glm::dvec3& v) { return std::max(std::fabs(v.x), std
 /// normalised space, with its rounding bound checked against `budget` (normalised units):
 ///   |dn| <= 8 eps |a| |b| (differences and the cross product rounded, products of floats exact),
 ///   world signed-distance error at a light point x <= (|dn| + 4 eps |n|) (|x| + |origin|) / |n|,
-///   normalised by the smallest semi-axis, plus 16 eps for planeToLocal.
+///   normalised by the smallest semi-axis, plus 24 eps (planeToLocal, a rotation step).
 inline LocalPlane localPlane(const LightFrame& frame, const glm::dvec3& origin, const glm::dvec3& a, const glm::dvec3& b,
                              bool flip, double reach, double min_scale, double budget) {
     LocalPlane out;
@@ -160,7 +216,8 @@ inline LocalPlane localPlane(const LightFrame& frame, const glm::dvec3& origin, 
     if (flip) n = -n;
     const double w = -oracle::dot3(n, origin);
     const double dn = 8.0 * kEpsilon * oracle::length3(a) * oracle::length3(b);
-    const double error = (dn + 4.0 * kEpsilon * length) * (reach + oracle::length3(origin)) / length / min_scale + 16.0 * kEpsilon;
+    // (+ 16 eps for planeToLocal, + 8 eps for a rotation step applied afterwards.)
+    const double error = (dn + 4.0 * kEpsilon * length) * (reach + oracle::length3(origin)) / length / min_scale + 24.0 * kEpsilon;
     out.plane = frame.planeToLocal(glm::dvec4(n, w));
     out.proven = error <= budget;
     return out;
@@ -197,10 +254,14 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
     for (size_t i = 0; i < casters.vertex_count; ++i)
         PENUMBRA_CHECK(finite(casters.positions[i]), "sampleBasedSoftCpu: caster vertex ", i, " is not finite");
+    const uint32_t rotations = options.rotations;
+    const std::vector<glm::dvec4> table = sampleBasedSoftSampleTable(sets, rotations);  // checks rotations
     for (size_t r = 0; r < receivers.count; ++r) {
         PENUMBRA_CHECK(finite(receivers.positions[r]), "sampleBasedSoftCpu: receiver ", r, " is not finite");
-        PENUMBRA_CHECK(!receivers.sets || receivers.sets[r] < k, "sampleBasedSoftCpu: receiver ", r, " uses set ",
-                       receivers.sets ? receivers.sets[r] : 0u, " of ", k);
+        const uint32_t word = receivers.sets ? receivers.sets[r] : 0u;
+        PENUMBRA_CHECK((word & 0xFFu) < k, "sampleBasedSoftCpu: receiver ", r, " uses set ", word & 0xFFu, " of ", k);
+        PENUMBRA_CHECK((word >> 8) < rotations, "sampleBasedSoftCpu: receiver ", r, " uses rotation step ", word >> 8,
+                       " of ", rotations);
     }
 
     SampleBasedSoftCpuResult result;
@@ -241,8 +302,10 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
 
     for (size_t r = 0; r < receivers.count; ++r) {
         const glm::dvec3 p(receivers.positions[r]);
-        const uint32_t set = receivers.sets ? receivers.sets[r] : 0u;
-        const glm::dvec3* world = sets.worldSet(set);
+        const uint32_t word = receivers.sets ? receivers.sets[r] : 0u;
+        const uint32_t set = word & 0xFFu, step = word >> 8;
+        const glm::dvec4* world = table.data() + (size_t(set) * rotations + step) * n;
+        const glm::dvec2 turn(table[size_t(n) * k * rotations + step]);
         uint32_t* out = result.masks.data() + r * words;
         // Bounds of the oracle's per-sample scale term |s - p|_inf over the light.
         const double centre_reach = soft::maxAbs3(frame.center - p);
@@ -259,7 +322,8 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             oracle::Triangle tri{v0, v1, v2, static_cast<uint32_t>(t)};
             auto decide = [&](uint32_t s) {  // the oracle's verdict for one pair
                 ++result.exact_tests;
-                const oracle::Verdict v = oracle::classifySegment(tri, oracle::makeSegmentQuery(p, world[s], options.oracle));
+                const oracle::Verdict v =
+                    oracle::classifySegment(tri, oracle::makeSegmentQuery(p, glm::dvec3(world[s]), options.oracle));
                 return v.hit;
             };
             if (mode == SoftMode::Brute) {
@@ -325,6 +389,10 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 support[t],
             };
             if (positive) planes[3].plane = -planes[3].plane;
+            // Rotated samples are behind a plane when the unrotated ones (the LUT's) are behind it
+            // rotated back (lightLutRotate; exact in its rounding: localPlane's bound covers it).
+            if (step != 0)
+                for (soft::LocalPlane& plane : planes) plane.plane = lightLutRotate(plane.plane, turn.x, turn.y);
             if (mode == SoftMode::Exact && unproven) {
                 ++result.pairs_unproven;
                 result.uncertain_bits += n;
@@ -397,6 +465,9 @@ struct SampleBasedSoftGpuOptions {
     /// fp64 construction, and the rounding to float (<= 3 * 2^-24 in d and in the normal) takes
     /// the other quarter: 0.25 leaves it.
     double plane_budget = 0.25;
+    /// Rotation steps about the light's local z, picked per view sample by its selection word
+    /// (SampleBasedSoftOptions::rotations; 1 = none).
+    uint32_t rotations = 1;
     bool count_work = true;  ///< work counters (atomics in the light pass)
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
@@ -417,6 +488,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    "penumbra::SampleBasedSoftShadows: oracle epsilons must be in [0, 0.1]");
     PENUMBRA_CHECK(o.plane_budget > 0.0 && o.plane_budget <= 0.5, "penumbra::SampleBasedSoftShadows: plane_budget = ",
                    o.plane_budget, " must be in (0, 0.5]");
+    PENUMBRA_CHECK(o.rotations >= 1 && o.rotations <= 256, "penumbra::SampleBasedSoftShadows: rotations = ", o.rotations,
+                   " must be in [1, 256]");
 }
 
 /// The light-pass parameter block for list block `block` (the host fills one slot per block).
@@ -447,6 +520,9 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
     p.config = glm::uvec4(static_cast<uint32_t>(o.mode), n, k, (n + 31) / 32);
     p.counts = glm::uvec4(sample_count, o.max_list_blocks * o.list_block, lut ? lut->params.tables_per_set : (n + 127) / 128,
                           has_sets ? 1u : 0u);
+    PENUMBRA_CHECK(o.rotations == 1 || f.symmetric, "penumbra::SampleBasedSoftShadows: rotations = ", o.rotations,
+                   " needs a light symmetric about its local z axis (sphere, disk, ellipsoid with equal x and y)");
+    p.reserved = glm::uvec4(o.rotations, 0u, 0u, 0u);
     if (lut) p.lut = lut->params;
     return p;
 }
@@ -480,14 +556,6 @@ inline double sampleBasedSoftLutTolerance(const SampleBasedSoftGpuOptions& o, co
     return std::max(1e-6, 1.25 * needed);  // 25 % above the bound: the per-pair check is strict
 }
 
-/// World light samples as the GPU reads them: dvec4 (xyz, 0) per sample, set-major (K * N).
-inline std::vector<glm::dvec4> sampleBasedSoftWorldSamples(const LightSampleSets& sets) {
-    std::vector<glm::dvec4> out;
-    out.reserve(size_t(sets.count()) * sets.sets());
-    for (uint32_t s = 0; s < sets.sets(); ++s)
-        for (uint32_t i = 0; i < sets.count(); ++i) out.emplace_back(sets.worldSet(s)[i], 0.0);
-    return out;
-}
 
 }  // namespace penumbra
 

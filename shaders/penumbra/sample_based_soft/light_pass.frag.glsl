@@ -100,12 +100,12 @@ dvec4 penumbraSbsPlaneToLocal(dvec4 plane) {
 // the light's normalised space (rounded to float for the lookup), and whether its rounding bound
 // (float inputs, fp64 arithmetic, the change of frame; normalised units) fits the budget.
 struct PenumbraSbsPlane {
-    vec4 plane;
+    dvec4 plane;  // rounded to float at the lookup (after the rotation step, if any)
     bool proven;
 };
 PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip) {
     const PenumbraSbsParams P = penumbraSbsParams;
-    PenumbraSbsPlane result = PenumbraSbsPlane(vec4(0.0), false);
+    PenumbraSbsPlane result = PenumbraSbsPlane(dvec4(0.0LF), false);
     dvec3 n = penumbraSbsCross(a, b);
     const double length = penumbraSbsLength(n);
     if (!(length > 0.0LF) || !(length < 1e300LF)) return result;
@@ -113,8 +113,8 @@ PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip
     precise double w = -penumbraSbsDot(n, origin);
     precise double dn = 8.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b);
     precise double error = (dn + 4.0LF * kPenumbraSbsEpsilon * length) * (P.bounds.y + penumbraSbsLength(origin)) / length /
-                           P.scale.w + 16.0LF * kPenumbraSbsEpsilon;
-    result.plane = vec4(penumbraSbsPlaneToLocal(dvec4(n, w)));
+                           P.scale.w + 24.0LF * kPenumbraSbsEpsilon;
+    result.plane = penumbraSbsPlaneToLocal(dvec4(n, w));
     result.proven = error <= P.bounds.z;
     return result;
 }
@@ -151,9 +151,11 @@ void main() {
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const uint id = penumbraSampleListsId(slot);
-        uint set = P.counts.w != 0u ? penumbraSbsSets[id] : 0u;
-        if (set >= P.config.z) set = 0u;  // out of range: set 0 (the CPU twin rejects it)
-        const uint mask_base = id * words, sample_base = set * n;
+        const uint word = P.counts.w != 0u ? penumbraSbsSets[id] : 0u;
+        uint set = word & 0xFFu, turn_step = word >> 8;
+        if (set >= P.config.z) set = 0u;    // out of range: set 0 (the CPU twin rejects it)
+        if (turn_step >= P.reserved.x) turn_step = 0u;  // ... unrotated
+        const uint mask_base = id * words, sample_base = (set * P.reserved.x + turn_step) * n;
         ++pairs;
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
         PenumbraSbsPlane planes[4];
@@ -200,6 +202,17 @@ void main() {
             planes[2] = penumbraSbsLocalPlane(p, c, a, positive);
             planes[3] = support;  // T's plane, p in front
             if (positive) planes[3].plane = -planes[3].plane;
+            if (turn_step != 0u) {
+                // Rotated samples are behind a plane when the LUT's (unrotated) ones are behind it
+                // rotated back: penumbraLutRotate's arithmetic in fp64 (the twin's lightLutRotate).
+                const dvec2 turn = penumbraSbsSamples[P.config.z * P.reserved.x * n + turn_step].xy;
+                for (int i = 0; i < 4; ++i) {
+                    const dvec4 q = planes[i].plane;
+                    precise double x = turn.x * q.x + turn.y * q.y;
+                    precise double y = turn.x * q.y - turn.y * q.x;
+                    planes[i].plane = dvec4(x, y, q.z, q.w);
+                }
+            }
             if (all_exact) {
                 ++unproven_pairs;
                 uncertain_bits += n;
@@ -220,7 +233,7 @@ void main() {
             const uint table = set * tables + block;
             if (mode == PENUMBRA_SBS_MODE_LUT) {
                 uvec4 m = uvec4(0xFFFFFFFFu);
-                for (int i = 0; i < 4; ++i) m &= penumbraLutBehind(planes[i].plane, table);
+                for (int i = 0; i < 4; ++i) m &= penumbraLutBehind(vec4(planes[i].plane), table);
                 for (uint w = 0u; w < 4u && block * 4u + w < words; ++w)
                     if (m[w] != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m[w]);
                 continue;
@@ -230,7 +243,7 @@ void main() {
             for (int i = 0; i < 4; ++i) {
                 uvec4 c_i = uvec4(0u), u_i = valid;
                 if (planes[i].proven) {
-                    c_i = penumbraLutBehindCertified(planes[i].plane, table, u_i);
+                    c_i = penumbraLutBehindCertified(vec4(planes[i].plane), table, u_i);
                 } else {
                     ++unproven_planes;
                 }

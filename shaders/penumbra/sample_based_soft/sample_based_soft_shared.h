@@ -34,10 +34,12 @@
 #define PENUMBRA_SBS_LUT_BINDING 6        // uvec4[]: the LUT (LightLutGenerator's table)
 #endif
 #ifndef PENUMBRA_SBS_SAMPLES_BINDING
-#define PENUMBRA_SBS_SAMPLES_BINDING 7    // dvec4[K * N]: world light samples (xyz), set-major
+#define PENUMBRA_SBS_SAMPLES_BINDING 7    // dvec4[K * R * N + R]: world light samples per (set, rotation
+                                          // step), then (cos, sin) of the R steps (sampleBasedSoftSampleTable)
 #endif
 #ifndef PENUMBRA_SBS_SETS_BINDING
-#define PENUMBRA_SBS_SETS_BINDING 8       // uint[sample_count]: light-sample set per view-sample id
+#define PENUMBRA_SBS_SETS_BINDING 8       // uint[sample_count]: selection word per view-sample id (bits 0-7
+                                          // the set, bits 8-15 the rotation step)
 #endif
 #ifndef PENUMBRA_SBS_HEADER_BINDING
 #define PENUMBRA_SBS_HEADER_BINDING 5     // the lists' header (block predicate pass only)
@@ -98,7 +100,7 @@ struct PenumbraSbsParams {
     uvec4 config;       // x = mode, y = N (samples per set), z = K (sets), w = words per view sample
     uvec4 counts;       // x = sample count, y = samples per list walked (max_list_blocks * list block),
                         // z = tables per set, w = 1 when a per-sample set buffer is bound
-    uvec4 reserved;
+    uvec4 reserved;     // x = R (rotation steps about local z; 1 = none)
     PenumbraLutParams lut;
 };
 

@@ -28,8 +28,9 @@
 //             included, so the result is the oracle's), or the engine's depth buffer + inverse
 //             view-projection (SampleDepthInput: positions reconstructed on the GPU; the lists'
 //             list_positions / list_ids hold the float positions the exact test used); the LUT table (LightLutGenerator's, or
-//             generateLightLut uploaded) as a BufferRange; optionally a uint per sample id naming
-//             its light-sample set (lightSampleSet per pixel; empty = set 0); a callback that
+//             generateLightLut uploaded) as a BufferRange; optionally a selection word per sample
+//             id naming its light-sample set and rotation step (sampleBasedSoftSelection per
+//             pixel; empty = set 0, unrotated; options.rotations steps); a callback that
 //             draws every caster (positions through penumbraAfhCasterPosition(), attribute 0 by
 //             default) while the pipeline's light-pass program is bound.
 //   produces: per view-sample id `words = ceil(N / 32)` mask words (bit s of word id * words +
@@ -95,7 +96,7 @@ struct SbsBindings {
 
 /// Per-frame ranges of run(); empty = the executor's own buffers (sets: set 0 for every sample).
 struct SbsFrameBuffers {
-    BufferRange sets;        ///< uint[sample_count]: light-sample set per view-sample id (< K)
+    BufferRange sets;        ///< uint[sample_count]: selection word per view-sample id (sampleBasedSoftSelection)
     BufferRange masks;       ///< uint[sample_count * words]: output
     BufferRange visibility;  ///< float[sample_count]: output
 };
@@ -164,7 +165,7 @@ public:
         params_staging_.assign(size_t(param_stride_) * (1 + options_.max_list_blocks), 0u);
         params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
         influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
-        const std::vector<glm::dvec4> world = sampleBasedSoftWorldSamples(sets_);
+        const std::vector<glm::dvec4> world = sampleBasedSoftSampleTable(sets_, options_.rotations);
         samples_ = gl::Buffer::fromVector(world);
         work_ = gl::Buffer(PENUMBRA_SBS_WORK_WORDS * 4);
         lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
