@@ -20,7 +20,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <functional>
 #include <limits>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -360,6 +363,224 @@ void walkLists(const SampleListsSetup& setup, const SampleListsLight& light, con
     size_t bad_words = 0;
     for (size_t w = 0; w < expected.size(); ++w) bad_words += words[w] != expected[w];
     CHECK(bad_words == 0);
+}
+
+// ----- RHI-style replay of a plan (planSampleLists) with raw GL calls, no SampleListBuilder -----
+
+// Programs an engine compiles once from a plan's keys and defines (cached across cases).
+GLuint planProgram(const std::string& key, const penumbra::ShaderDefines& defines) {
+    static std::map<std::string, gl::Program> cache;
+    std::string id = key;
+    for (const penumbra::ShaderDefine& d : defines) id += "|" + d.name + "=" + d.value;
+    auto it = cache.find(id);
+    if (it == cache.end()) it = cache.emplace(id, gl::buildComputeProgram(key, defines)).first;
+    return it->second.id();
+}
+
+// Records a ScanPlan with raw GL (as tests/scan_test.cpp's replay): counts -> offsets.
+void replayScanPlan(const penumbra::ScanPlan& plan, const penumbra::BufferRange& input,
+                    const penumbra::BufferRange& output) {
+    using penumbra::ScanBuffer;
+    if (plan.dispatch_list.empty()) return;
+    REQUIRE(plan.input_offset == input.offset);
+    REQUIRE(plan.output_offset == output.offset);
+    gl::Buffer scratch(std::max<uint64_t>(plan.scratch_bytes, 16));
+    scratch.fill(kPoison);  // needs no initialisation
+    std::vector<unsigned char> constants(plan.constants_bytes);
+    for (size_t i = 0; i < plan.dispatch_list.size(); ++i) {
+        std::memcpy(constants.data() + plan.dispatch_list[i].constants.offset, &plan.constants[i],
+                    sizeof(penumbra::shared::PenumbraScanConstants));
+    }
+    gl::Buffer ubo(constants.size(), constants.data());
+    auto name = [&](ScanBuffer b) -> GLuint {
+        switch (b) {
+            case ScanBuffer::Input: return input.buffer;
+            case ScanBuffer::Output: return output.buffer;
+            case ScanBuffer::Scratch: return scratch.id();
+            case ScanBuffer::Constants: return ubo.id();
+            default: return 0;
+        }
+    };
+    auto bind = [&](GLenum target, GLuint index, const penumbra::ScanBinding& b) {
+        if (b.buffer == ScanBuffer::None) return;
+        glBindBufferRange(target, index, name(b.buffer), static_cast<GLintptr>(b.offset),
+                          static_cast<GLsizeiptr>(b.size));
+    };
+    for (const penumbra::ScanDispatch& d : plan.dispatch_list) {
+        const char* pass = d.pass == penumbra::ScanPass::Reduce ? "PENUMBRA_SCAN_PASS_REDUCE"
+                           : d.pass == penumbra::ScanPass::Scan ? "PENUMBRA_SCAN_PASS_SCAN"
+                                                                : "PENUMBRA_SCAN_PASS_TOP";
+        const GLuint program =
+            planProgram("penumbra/scan/scan.comp.glsl", {{"PENUMBRA_SCAN_PASS", pass},
+                                                         {"PENUMBRA_SCAN_GROUP_SIZE", std::to_string(plan.group_size)},
+                                                         {"PENUMBRA_SCAN_ITEMS_PER_THREAD",
+                                                          std::to_string(plan.items_per_thread)},
+                                                         {"PENUMBRA_SCAN_VEC4", d.vec4 ? "1" : "0"}});
+        bind(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_INPUT, d.input);
+        bind(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_OUTPUT, d.output);
+        if (d.vec4) {
+            bind(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_INPUT_VEC4, d.input);
+            bind(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_OUTPUT_VEC4, d.output);
+        }
+        bind(GL_SHADER_STORAGE_BUFFER, PENUMBRA_SCAN_BINDING_PARTIALS, d.partials);
+        bind(GL_UNIFORM_BUFFER, PENUMBRA_SCAN_BINDING_CONSTANTS, d.constants);
+        glUseProgram(program);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glDispatchCompute(d.grid.x, d.grid.y, 1);
+    }
+    glFinish();  // the scratch and constants buffers die with this scope
+}
+
+// An engine with its own RHI: walks a plan's steps with raw GL calls, its own programs, its own
+// constants buffer and sampler, binding resources by the plan's roles.
+void replaySampleListsPlan(const penumbra::SampleListsPlan& plan, const penumbra::SampleBufferInput* buffer_input,
+                           const penumbra::SampleDepthInput* depth_input, const penumbra::SampleListsBuffers& out) {
+    using R = penumbra::SampleListsResource;
+    using penumbra::SampleListsStepKind;
+    gl::Buffer params(sizeof(penumbra::SampleListsParams));
+    GLuint sampler = 0;
+    glCreateSamplers(1, &sampler);
+    glSamplerParameteri(sampler, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+    glSamplerParameteri(sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glSamplerParameteri(sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    auto range = [&](R r) -> penumbra::BufferRange {
+        switch (r) {
+            case R::Params: return {params.id(), 0, params.size()};
+            case R::Frustum: return out.frustum;
+            case R::Positions: REQUIRE(buffer_input); return buffer_input->positions;
+            case R::Normals: REQUIRE(buffer_input); return buffer_input->normals;
+            case R::Counts: return out.counts;
+            case R::Offsets: return out.offsets;
+            case R::ListPositions: return out.list_positions;
+            case R::ListIds: return out.list_ids;
+            case R::SampleSlots: return out.sample_slots;
+            case R::SampleTexels: return out.sample_texels;
+            case R::Header: return out.header;
+            default: FAIL("no buffer for resource ", penumbra::sampleListsResourceName(r)); return {};
+        }
+    };
+    for (const penumbra::SampleListsStep& step : plan.steps) {
+        switch (step.kind) {
+            case SampleListsStepKind::Upload: {
+                const penumbra::BufferRange r = range(step.resource);
+                const void* data = step.resource == R::Params ? static_cast<const void*>(&plan.params)
+                                                              : static_cast<const void*>(&plan.frustum);
+                glNamedBufferSubData(r.buffer, GLintptr(r.offset), GLsizeiptr(step.bytes), data);
+                break;
+            }
+            case SampleListsStepKind::Clear: {
+                const penumbra::BufferRange r = range(step.resource);
+                glClearNamedBufferSubData(r.buffer, GL_R32UI, GLintptr(r.offset + uint64_t(step.first_word) * 4),
+                                          GLsizeiptr(uint64_t(step.words) * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                                          &step.value);
+                break;
+            }
+            case SampleListsStepKind::Dispatch: {
+                const penumbra::SampleListsProgram* program = plan.program(step.kernel);
+                REQUIRE(program);
+                glUseProgram(planProgram(program->key, program->defines));
+                for (uint32_t i = 0; i < step.binding_count; ++i) {
+                    const penumbra::SampleListsBinding& b = step.bindings[i];
+                    if (b.kind == penumbra::SampleListsBindingKind::Texture) {
+                        REQUIRE(depth_input);
+                        glBindTextureUnit(b.point, b.resource == R::DepthTexture ? depth_input->depth_texture
+                                                                                 : depth_input->normal_texture);
+                        glBindSampler(b.point, sampler);
+                        continue;
+                    }
+                    const penumbra::BufferRange r = range(b.resource);
+                    REQUIRE(r.size >= b.bytes);
+                    const GLenum target = b.kind == penumbra::SampleListsBindingKind::UniformBuffer
+                                              ? GL_UNIFORM_BUFFER
+                                              : GL_SHADER_STORAGE_BUFFER;
+                    glBindBufferRange(target, b.point, r.buffer, GLintptr(r.offset), GLsizeiptr(b.bytes));
+                }
+                glDispatchCompute(step.grid.x, step.grid.y, 1);
+                break;
+            }
+            case SampleListsStepKind::Scan:
+                REQUIRE(plan.scan.n == step.elements);
+                replayScanPlan(plan.scan, range(step.resource), range(step.output));
+                break;
+            case SampleListsStepKind::Barrier: glMemoryBarrier(static_cast<GLbitfield>(step.barriers)); break;
+        }
+    }
+    glFinish();
+    glDeleteSamplers(1, &sampler);
+    glUseProgram(0);
+    gl::checkErrors("plan replay");
+}
+
+// Every output of a build in one buffer at aligned, non-zero offsets (the plan's scan bindings
+// are absolute offsets).
+struct ArenaLists {
+    gl::Buffer arena;
+    penumbra::SampleListsBuffers ranges;
+    ArenaLists(const SampleListsSetup& s, uint64_t alignment) {
+        uint64_t at = alignment;
+        auto take = [&](uint64_t bytes) {
+            const penumbra::BufferRange r{0, at, bytes};
+            at += penumbra::detail::alignUp(std::max<uint64_t>(bytes, 4), alignment);
+            return r;
+        };
+        penumbra::BufferRange* all[] = {&ranges.counts,       &ranges.offsets,       &ranges.list_positions,
+                                        &ranges.list_ids,     &ranges.sample_slots,  &ranges.sample_texels,
+                                        &ranges.header,       &ranges.frustum};
+        const uint64_t bytes[] = {s.counts_bytes,       s.offsets_bytes,       s.list_positions_bytes,
+                                  s.list_ids_bytes,     s.sample_slots_bytes,  s.sample_texels_bytes,
+                                  s.header_bytes,       sizeof(penumbra::SampleListsFrustum)};
+        for (int i = 0; i < 8; ++i) *all[i] = take(bytes[i]);
+        arena = gl::Buffer(at);
+        arena.fill(kPoison);
+        for (penumbra::BufferRange* r : all) r->buffer = arena.id();
+    }
+};
+
+// Executor build, then the plan replayed into its own (poisoned) buffers: the same lists, header
+// and frustum bytes, and both equal to the CPU twin (for the fitted frustum when fitting).
+// Returns the accepted count.
+uint32_t checkReplay(const SampleListsSetup& setup, const SampleListsLight& light, const SampleListsOptions& options,
+                     const penumbra::SampleListsBuild& build, const penumbra::SampleListsBindingPoints* bindings,
+                     const penumbra::SampleBufferInput* buffer_input, const penumbra::SampleDepthInput* depth_input,
+                     const std::function<SampleListsCpu(const SampleListsLight&)>& cpu_build) {
+    const penumbra::SampleListsInputKind kind =
+        depth_input ? penumbra::SampleListsInputKind::Depth : penumbra::SampleListsInputKind::Buffer;
+    GpuLists executor_lists(setup);
+    executor_lists.poison();
+    const Status status = depth_input ? buildChecked(setup, light, *depth_input, executor_lists.ids(), options, build)
+                                      : buildChecked(setup, light, *buffer_input, executor_lists.ids(), options, build);
+    REQUIRE(status == Status::Ok);
+    const SampleListsCpu executor = penumbra::downloadSampleLists(setup, executor_lists.ids());
+
+    GLint ssbo_alignment = 0, ubo_alignment = 0;
+    glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &ssbo_alignment);
+    glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &ubo_alignment);
+    ArenaLists replay_lists(setup, uint64_t(std::max({ssbo_alignment, ubo_alignment, 16})));
+    penumbra::SampleListsPlanOptions plan_options =
+        builder().planOptions(replay_lists.ranges.counts.offset, replay_lists.ranges.offsets.offset);
+    if (bindings) plan_options.bindings = *bindings;
+    const penumbra::SampleListsPlan plan = penumbra::planSampleLists(
+        setup, light, options, build, kind, depth_input ? &depth_input->view : nullptr, plan_options);
+    replaySampleListsPlan(plan, buffer_input, depth_input, replay_lists.ranges);
+    const SampleListsCpu replayed = penumbra::downloadSampleLists(setup, replay_lists.ranges);
+    CHECK(penumbra::sampleListsDifference(replayed, executor) == "");
+
+    // Header (counters, fit keys, statistics; untouched words still poisoned alike) and frustum.
+    const penumbra::SampleListsHeader h_exec = penumbra::SampleListBuilder::readHeader(executor_lists.ids().header);
+    const penumbra::SampleListsHeader h_replay = penumbra::SampleListBuilder::readHeader(replay_lists.ranges.header);
+    CHECK(std::memcmp(&h_exec, &h_replay, sizeof h_exec) == 0);
+    const penumbra::SampleListsFrustum f_exec = penumbra::SampleListBuilder::readFrustum(executor_lists.ids().frustum);
+    const penumbra::SampleListsFrustum f_replay = penumbra::SampleListBuilder::readFrustum(replay_lists.ranges.frustum);
+    CHECK(std::memcmp(&f_exec, &f_replay, sizeof f_exec) == 0);
+
+    SampleListsLight used = light;
+    if (build.fit_frustum) used.view_projection = f_replay.view_projection;
+    const SampleListsCpu cpu = cpu_build(used);
+    CHECK(penumbra::sampleListsDifference(replayed, cpu) == "");
+    if (build.statistics) {
+        CHECK(penumbra::sampleListStatisticsFromHeader(setup, h_replay) == penumbra::sampleListStatisticsCpu(cpu));
+    }
+    return cpu.header.accepted;
 }
 
 }  // namespace
@@ -1069,4 +1290,253 @@ TEST_CASE("a fresh builder needs reserve(); a moved builder builds the same stru
     CHECK(moved.build(setup, pointLight(), bufferInput(positions, normals), lists.ids()) == Status::Ok);
     const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
     CHECK(penumbra::sampleListsDifference(gpu, cpuBuild(setup, pointLight(), samples, {})) == "");
+}
+
+TEST_CASE("planSampleLists: pass order, grids, bindings, programs and constants without GL") {
+    using K = penumbra::SampleListsStepKind;
+    using R = penumbra::SampleListsResource;
+    using penumbra::SampleListsBarrier;
+    using penumbra::SampleListsKernel;
+    const SampleListsLight light = pointLight();
+    auto kinds = [](const penumbra::SampleListsPlan& plan) {
+        std::string out;
+        for (const penumbra::SampleListsStep& s : plan.steps) {
+            out += penumbra::sampleListsStepKindName(s.kind);
+            if (s.kind == K::Upload || s.kind == K::Clear) {
+                out += std::string(":") + penumbra::sampleListsResourceName(s.resource);
+            }
+            if (s.kind == K::Dispatch) out += ":" + std::string(penumbra::sampleListsKernelKey(s.kernel)).substr(22);
+            out += " ";
+        }
+        return out;
+    };
+    auto find = [](const penumbra::SampleListsPlan& plan,
+                   SampleListsKernel kernel) -> const penumbra::SampleListsStep* {
+        for (const penumbra::SampleListsStep& s : plan.steps) {
+            if (s.kind == K::Dispatch && s.kernel == kernel) return &s;
+        }
+        return nullptr;
+    };
+    auto bound = [](const penumbra::SampleListsStep& s, R r) -> const penumbra::SampleListsBinding* {
+        for (uint32_t i = 0; i < s.binding_count; ++i) {
+            if (s.bindings[i].resource == r) return &s.bindings[i];
+        }
+        return nullptr;
+    };
+
+    // Everything on: fit, count, scan, scatter, statistics.
+    for (size_t n : {size_t(1), size_t(255), size_t(256), size_t(257), size_t(65537)}) {
+        CAPTURE(n);
+        const SampleListsSetup setup = penumbra::sampleListsSetup(300, 200, n);
+        penumbra::SampleListsBuild build;
+        build.fit_frustum = true;
+        build.statistics = true;
+        const penumbra::SampleListsPlan plan =
+            penumbra::planSampleLists(setup, light, {}, build, penumbra::SampleListsInputKind::Buffer);
+        CHECK(kinds(plan) ==
+              "upload:params clear:counts clear:header clear:header clear:header dispatch:fit.comp.glsl barrier "
+              "dispatch:fit_resolve.comp.glsl barrier dispatch:count.comp.glsl scan barrier "
+              "dispatch:scatter.comp.glsl barrier clear:header dispatch:statistics.comp.glsl barrier ");
+        const uint64_t groups = (n + 255) / 256;
+        for (SampleListsKernel k : {SampleListsKernel::Fit, SampleListsKernel::Count, SampleListsKernel::Scatter}) {
+            const penumbra::SampleListsStep* s = find(plan, k);
+            REQUIRE(s);
+            CHECK(s->grid.groups == groups);
+            CHECK(uint64_t(s->grid.x) * s->grid.y >= groups);
+            CHECK(s->grid.x == setup.sample_groups.x);
+            CHECK(s->grid.y == setup.sample_groups.y);
+            REQUIRE(bound(*s, R::Params));
+            CHECK(bound(*s, R::Params)->kind == penumbra::SampleListsBindingKind::UniformBuffer);
+            CHECK(bound(*s, R::Positions)->bytes == n * 16);
+            CHECK(bound(*s, R::Normals)->point == PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS);
+        }
+        CHECK(find(plan, SampleListsKernel::FitResolve)->grid.x == 1);
+        CHECK(find(plan, SampleListsKernel::FitResolve)->grid.y == 1);
+        CHECK(bound(*find(plan, SampleListsKernel::FitResolve), R::Frustum)->point ==
+              PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT);
+        CHECK(bound(*find(plan, SampleListsKernel::Count), R::Frustum)->kind ==
+              penumbra::SampleListsBindingKind::UniformBuffer);
+        CHECK(bound(*find(plan, SampleListsKernel::Count), R::Counts)->bytes == setup.counts_bytes);
+        CHECK(bound(*find(plan, SampleListsKernel::Scatter), R::Counts) == nullptr);
+        CHECK(find(plan, SampleListsKernel::Statistics)->grid.groups == (60000 + 255) / 256);
+        CHECK(plan.steps[6].barriers == SampleListsBarrier::Storage);
+        CHECK(plan.steps[8].barriers == (SampleListsBarrier::Storage | SampleListsBarrier::Uniform));
+        CHECK(static_cast<uint32_t>(plan.steps[plan.steps.size() - 1].barriers) == 0x2244u);
+        // The scan step: W * H counts into offsets, the embedded plan planScan's own.
+        CHECK(plan.steps[10].kind == K::Scan);
+        CHECK(plan.steps[10].resource == R::Counts);
+        CHECK(plan.steps[10].output == R::Offsets);
+        CHECK(plan.steps[10].elements == 60000);
+        CHECK(plan.scan.n == 60000);
+        CHECK(plan.scan.dispatch_list.size() == penumbra::planScan(60000).dispatch_list.size());
+        CHECK(plan.scan.dispatch_list.size() > 1);  // reduce, top, scan
+        // Constants: the blocks the executor uploads.
+        const penumbra::SampleListsParams params = penumbra::sampleListsParams(setup, light, {}, nullptr, build.fit);
+        CHECK(std::memcmp(&plan.params, &params, sizeof params) == 0);
+        const penumbra::SampleListsFrustum frustum = penumbra::sampleListsFrustum(params);
+        CHECK(std::memcmp(&plan.frustum, &frustum, sizeof frustum) == 0);
+        // Programs once each, in first-use order; the input permutation only where it exists.
+        REQUIRE(plan.programs.size() == 5);
+        CHECK(plan.programs[0].kernel == SampleListsKernel::Fit);
+        CHECK(plan.programs[4].kernel == SampleListsKernel::Statistics);
+        for (const penumbra::SampleListsProgram& p : plan.programs) {
+            bool has_input = false;
+            for (const penumbra::ShaderDefine& d : p.defines) has_input |= d.name == "PENUMBRA_SAMPLE_LISTS_INPUT";
+            CHECK(has_input == penumbra::sampleListsKernelPerInput(p.kernel));
+        }
+    }
+
+    // Nothing optional, no samples: no dispatch at all, the host uploads the frustum.
+    {
+        const SampleListsSetup setup = penumbra::sampleListsSetup(13, 7, 0);
+        const penumbra::SampleListsPlan plan =
+            penumbra::planSampleLists(setup, light, {}, {}, penumbra::SampleListsInputKind::Buffer);
+        CHECK(kinds(plan) == "upload:params clear:counts clear:header upload:frustum scan barrier barrier ");
+        CHECK(plan.programs.empty());
+        CHECK(plan.steps[1].words == 91);
+        CHECK(plan.steps[3].bytes == sizeof(penumbra::SampleListsFrustum));
+    }
+
+    // Depth input, culling off, custom binding points: textures by unit, no normals, defines follow.
+    {
+        penumbra::SampleListsView view;
+        view.width = 16;
+        view.height = 16;
+        const SampleListsSetup setup = penumbra::sampleListsSetup(8, 8, 256);
+        SampleListsOptions options;
+        options.cull_back_facing = false;
+        penumbra::SampleListsPlanOptions po;
+        po.bindings.counts = 6;
+        po.bindings.depth_unit = 5;
+        const penumbra::SampleListsPlan plan = penumbra::planSampleLists(
+            setup, light, options, {}, penumbra::SampleListsInputKind::Depth, &view, po);
+        CHECK(kinds(plan) == "upload:params clear:counts clear:header upload:frustum dispatch:count.comp.glsl scan "
+                             "barrier dispatch:scatter.comp.glsl barrier ");
+        const penumbra::SampleListsStep* count = find(plan, SampleListsKernel::Count);
+        REQUIRE(count);
+        CHECK(bound(*count, R::DepthTexture)->point == 5);
+        CHECK(bound(*count, R::DepthTexture)->kind == penumbra::SampleListsBindingKind::Texture);
+        CHECK(bound(*count, R::NormalTexture) == nullptr);
+        CHECK(bound(*count, R::Positions) == nullptr);
+        CHECK(bound(*count, R::Counts)->point == 6);
+        CHECK(plan.params.view.x == 16);
+        const penumbra::SampleListsProgram* program = plan.program(SampleListsKernel::Count);
+        REQUIRE(program);
+        CHECK(std::string(program->key) == "penumbra/sample_lists/count.comp.glsl");
+        int matched = 0;
+        for (const penumbra::ShaderDefine& d : program->defines) {
+            matched += d.name == "PENUMBRA_SAMPLE_LISTS_INPUT" && d.value == "1";
+            matched += d.name == "PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS" && d.value == "6";
+            matched += d.name == "PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH" && d.value == "5";
+        }
+        CHECK(matched == 3);
+        CHECK(plan.program(SampleListsKernel::Fit) == nullptr);
+        // The view belongs to the depth input, and only to it.
+        CHECK_THROWS_WITH_AS(
+            penumbra::planSampleLists(setup, light, options, {}, penumbra::SampleListsInputKind::Depth),
+            doctest::Contains("needs its view"), penumbra::Error);
+        CHECK_THROWS_WITH_AS(
+            penumbra::planSampleLists(setup, light, options, {}, penumbra::SampleListsInputKind::Buffer, &view),
+            doctest::Contains("only for the depth input"), penumbra::Error);
+        SampleListsLight bad = light;
+        bad.light.w = 0.5f;
+        CHECK_THROWS_WITH_AS(penumbra::planSampleLists(setup, bad, options, {}, penumbra::SampleListsInputKind::Buffer),
+                             doctest::Contains("light.w = 0.5"), penumbra::Error);
+    }
+}
+
+TEST_CASE("RHI-style replay: the plan recorded with raw GL calls equals the executor and the CPU twin") {
+    context();
+    const uint32_t seed = testSeed(9);
+    std::mt19937 rng(seed);
+    const std::pair<uint32_t, uint32_t> grids[] = {{64, 48}, {300, 200}, {1, 1}, {257, 129}};
+    // Other binding points than the defaults: the plan's defines and bindings follow them.
+    penumbra::SampleListsBindingPoints moved;
+    moved.params = 2;
+    moved.frustum = 3;
+    moved.positions = 7;
+    moved.normals = 6;
+    moved.counts = 5;
+    moved.frustum_out = 5;
+    moved.offsets = 4;
+    moved.header = 4;
+    moved.list_positions = 3;
+    moved.list_ids = 2;
+    moved.sample_slots = 1;
+    moved.sample_texels = 0;
+    moved.depth_unit = 3;
+    moved.normal_unit = 2;
+    int round = 0;
+    uint64_t accepted = 0;
+    // Buffer input.
+    for (size_t n : {size_t(0), size_t(1), size_t(255), size_t(256), size_t(257), size_t(65537)}) {
+        for (int config = 0; config < 2; ++config) {
+            const auto grid = grids[(round++) % 4];
+            CAPTURE(n);
+            CAPTURE(config);
+            CAPTURE(grid.first);
+            CAPTURE(grid.second);
+            const SampleListsLight light = round % 3 == 0 ? directionalLight() : pointLight();
+            const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, n);
+            const Samples samples = randomSamples(rng, n);
+            SampleListsOptions options;
+            options.cull_back_facing = round % 4 != 1;
+            penumbra::SampleListsBuild build;
+            build.fit_frustum = build.statistics = config == 1;
+            auto positions = gl::Buffer::fromVector(samples.positions);
+            auto normals = gl::Buffer::fromVector(samples.normals);
+            const penumbra::SampleBufferInput input = bufferInput(positions, normals);
+            accepted += checkReplay(setup, light, options, build, round % 2 ? &moved : nullptr, &input, nullptr,
+                                    [&](const SampleListsLight& l) { return cpuBuild(setup, l, samples, options); });
+        }
+    }
+    // Depth input: 1, 255, 256, 257 and 65 792 samples.
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), d01(0.0f, 1.0f);
+    for (auto size : {std::pair<uint32_t, uint32_t>{1, 1}, {255, 1}, {16, 16}, {257, 1}, {256, 257}}) {
+        for (int config = 0; config < 2; ++config) {
+            const auto grid = grids[(round++) % 4];
+            const uint32_t vw = size.first, vh = size.second;
+            CAPTURE(vw);
+            CAPTURE(vh);
+            CAPTURE(config);
+            penumbra::SampleListsView view;
+            view.width = vw;
+            view.height = vh;
+            view.depth_zero_to_one = round % 2;
+            const glm::mat4 projection = view.depth_zero_to_one
+                                             ? glm::perspectiveRH_ZO(glm::radians(50.0f), 1.0f, 0.5f, 12.0f)
+                                             : glm::perspective(glm::radians(50.0f), 1.0f, 0.5f, 12.0f);
+            const glm::mat4 camera =
+                projection * glm::lookAt(glm::vec3(0.0f, 3.0f, 5.0f), glm::vec3(0.0f), glm::vec3(0, 1, 0));
+            view.inverse_view_projection = glm::inverse(camera);
+            std::vector<float> depth(size_t(vw) * vh);
+            std::vector<glm::vec4> normals(depth.size());
+            for (size_t i = 0; i < depth.size(); ++i) {
+                const float r = d01(rng);
+                depth[i] = r < 0.1f ? 1.0f : std::pow(d01(rng), 0.2f);
+                normals[i] = glm::vec4(glm::normalize(glm::vec3(unit(rng), unit(rng) + 1.5f, unit(rng))), 0.0f);
+            }
+            gl::Texture depth_texture(GL_TEXTURE_2D), normal_texture(GL_TEXTURE_2D);
+            glTextureStorage2D(depth_texture.id(), 1, GL_DEPTH_COMPONENT32F, GLsizei(vw), GLsizei(vh));
+            glTextureSubImage2D(depth_texture.id(), 0, 0, 0, GLsizei(vw), GLsizei(vh), GL_DEPTH_COMPONENT, GL_FLOAT,
+                                depth.data());
+            glTextureStorage2D(normal_texture.id(), 1, GL_RGBA32F, GLsizei(vw), GLsizei(vh));
+            glTextureSubImage2D(normal_texture.id(), 0, 0, 0, GLsizei(vw), GLsizei(vh), GL_RGBA, GL_FLOAT,
+                                normals.data());
+            const SampleListsLight light = round % 3 == 0 ? directionalLight() : pointLight();
+            SampleListsOptions options;
+            options.cull_back_facing = round % 4 != 2;
+            penumbra::SampleListsBuild build;
+            build.fit_frustum = build.statistics = config == 1;
+            const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, depth.size());
+            const penumbra::SampleDepthInput input{depth_texture.id(), normal_texture.id(), view};
+            accepted += checkReplay(setup, light, options, build, round % 2 ? &moved : nullptr, nullptr, &input,
+                                    [&](const SampleListsLight& l) {
+                                        return penumbra::buildSampleListsCpu(setup, l, view, depth.data(),
+                                                                             normals.data(), options);
+                                    });
+        }
+    }
+    MESSAGE(round, " builds replayed, ", accepted, " samples accepted");
+    CHECK(accepted > 10000);
 }

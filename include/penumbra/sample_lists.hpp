@@ -30,7 +30,11 @@
 // every buffer needs; sampleListsParams() builds the 256-byte uniform block (throwing on bad
 // numbers; the executor's per-frame path uses the non-throwing detail::sampleListsParamsValid);
 // sampleListsFrustum() is the frustum block of an unfitted build; shadowBitsBytes() sizes the
-// shadow bits.
+// shadow bits. planSampleLists() is the whole build as data (FidelityFX-style): the constants
+// blocks, the programs (key + defines) and the ordered steps — uploads, clears, dispatches with
+// their grids and bindings by role, the scan as an embedded ScanPlan, barriers — so an engine
+// with its own RHI records the passes itself ("The plan" below; the GL executor walks the same
+// steps).
 //
 // Rules (identical on GPU and CPU)
 //   Projection: t = T * (p, 1) with T = bias * light view-projection (T maps the frustum to
@@ -70,6 +74,7 @@
 #include "penumbra/detail/float_ops.hpp"
 #include "penumbra/error.hpp"
 #include "penumbra/scan.hpp"
+#include "penumbra/shader_defines.hpp"
 
 #include <glm/glm.hpp>
 
@@ -175,6 +180,14 @@ struct LightFrustumFitOptions {
     float min_margin = 1e-4f;  ///< at least this much (light-texture units of the original frustum):
                                ///< covers float rounding and a degenerate (single-point) box
     bool fit_far = true;       ///< move the far plane to the farthest sample (+ margin); never beyond the original
+};
+
+/// Per-build switches (of the executor's build() and of planSampleLists). Value-initialised =
+/// lists only, the light's own frustum.
+struct SampleListsBuild {
+    bool fit_frustum = false;  ///< §4.3 on the GPU before the lists (writes the frustum block)
+    LightFrustumFitOptions fit;
+    bool statistics = false;   ///< Fig. 9 words of the header after the lists
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -905,6 +918,454 @@ inline SampleListStatistics sampleListStatisticsCpu(const SampleListsCpu& lists)
     s.accepted = lists.header.accepted;
     for (uint32_t r = 0; r < kSampleListsReasonCount; ++r) s.rejected[r] = lists.header.rejected[r];
     return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The plan (FidelityFX-style): what build() records, as data an engine's own RHI records itself
+//
+// planSampleLists() returns the constants blocks and the ordered steps of one build: uploads of
+// the constants blocks, buffer clears, compute dispatches (entry shader, defines, grid, and which
+// resource is bound where), the scan of counts into offsets (an embedded ScanPlan), and memory
+// barriers. Resources are named by role (SampleListsResource), never by GL object. The GL
+// executor (SampleListBuilder::build) walks exactly these steps — detail::planSampleListsSteps
+// is the one definition of the pass list; tests/sample_lists_test.cpp replays a plan with raw GL
+// calls and gets the executor's lists.
+//
+// Recording a plan:
+//   once: compile every plan.programs[i] (key + defines, plus defines of your own) as a compute
+//         program; the scan's kernels as scan.hpp says for plan.scan; a 256-byte uniform buffer
+//         for SampleListsResource::Params (the executor owns one; you own yours); the scan's
+//         scratch (plan.scan.scratch_bytes) and constants (plan.scan.constants_bytes) buffers.
+//   per build, for every step in order:
+//     Upload:   write plan.params (resource Params) or plan.frustum (resource Frustum), `bytes`
+//               bytes, at the start of that resource's range.
+//     Clear:    set uints [first_word, first_word + words) of the resource's range to `value`.
+//     Dispatch: bind bindings[0 .. binding_count) (uniform block, shader-storage block or texture
+//               unit `point`, `bytes` bytes from the start of the resource's range), then
+//               dispatch the program of `kernel` on grid.x * grid.y * 1 work groups.
+//     Scan:     record plan.scan (scan.hpp, "Recording a plan"): ScanBuffer::Input = the Counts
+//               range, Output = the Offsets range, Scratch / Constants = your scan buffers. Its
+//               recording puts a storage barrier before each of its dispatches; the first one
+//               makes the count pass's counters visible to it. The scan rebinds its own binding
+//               points; every Dispatch step after it lists all of its bindings again.
+//     Barrier:  a memory barrier of `barriers` (SampleListsBarrier: the GL bits themselves; an
+//               RHI uses its UAV / uniform / transfer / indirect-argument barrier).
+//   Dispatches with no work are left out (no count, fit or scatter dispatch for 0 samples).
+
+/// Where the view samples come from: the PENUMBRA_SAMPLE_LISTS_INPUT permutation.
+enum class SampleListsInputKind : uint32_t {
+    Buffer = PENUMBRA_SAMPLE_LISTS_INPUT_BUFFER,  ///< vec4 positions + normals in buffers (SampleBufferInput)
+    Depth = PENUMBRA_SAMPLE_LISTS_INPUT_DEPTH,    ///< depth + normal textures and a SampleListsView (SampleDepthInput)
+};
+
+/// Binding points of the builder's kernels; value-initialised = the sample_lists_shared.h
+/// defaults. The GL executor's SampleListsBindings is this plus the scanner's bindings.
+struct SampleListsBindingPoints {
+    uint32_t params = PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS;    ///< uniform block
+    uint32_t frustum = PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM;  ///< uniform block (count pass)
+    uint32_t positions = PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS;  ///< SSBOs from here on
+    uint32_t normals = PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS;
+    uint32_t counts = PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS;
+    uint32_t frustum_out = PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT;
+    uint32_t offsets = PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS;
+    uint32_t header = PENUMBRA_SAMPLE_LISTS_BINDING_HEADER;
+    uint32_t list_positions = PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS;
+    uint32_t list_ids = PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS;
+    uint32_t sample_slots = PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS;
+    uint32_t sample_texels = PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS;
+    uint32_t depth_unit = PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH;    ///< texture units (depth input)
+    uint32_t normal_unit = PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS;
+};
+
+/// The builder's entry shaders (compute).
+enum class SampleListsKernel : uint32_t {
+    Count,       ///< pass 1: classify, count per texel (one invocation per sample)
+    Scatter,     ///< pass 3: slot = offset + local index (one invocation per sample)
+    Fit,         ///< §4.3: reduce the fit keys into the header (one invocation per sample)
+    FitResolve,  ///< §4.3: keys -> the frustum block (one work group)
+    Statistics,  ///< Fig. 9: reduce the counts into the header (one invocation per list)
+};
+inline constexpr uint32_t kSampleListsKernels = 5;
+
+/// The entry shader's key ("penumbra/sample_lists/count.comp.glsl", ...).
+inline const char* sampleListsKernelKey(SampleListsKernel kernel) {
+    switch (kernel) {
+        case SampleListsKernel::Count: return "penumbra/sample_lists/count.comp.glsl";
+        case SampleListsKernel::Scatter: return "penumbra/sample_lists/scatter.comp.glsl";
+        case SampleListsKernel::Fit: return "penumbra/sample_lists/fit.comp.glsl";
+        case SampleListsKernel::FitResolve: return "penumbra/sample_lists/fit_resolve.comp.glsl";
+        case SampleListsKernel::Statistics: return "penumbra/sample_lists/statistics.comp.glsl";
+    }
+    return "";
+}
+
+/// Whether the kernel reads the view samples (and so has a PENUMBRA_SAMPLE_LISTS_INPUT permutation).
+inline constexpr bool sampleListsKernelPerInput(SampleListsKernel kernel) {
+    return kernel == SampleListsKernel::Count || kernel == SampleListsKernel::Scatter ||
+           kernel == SampleListsKernel::Fit;
+}
+
+/// The defines the kernel is compiled with: every binding point, and PENUMBRA_SAMPLE_LISTS_INPUT
+/// for the per-input kernels (what the GL executor compiles, before the caller's extra defines).
+inline ShaderDefines sampleListsKernelDefines(SampleListsKernel kernel, SampleListsInputKind input,
+                                              const SampleListsBindingPoints& b = {}) {
+    ShaderDefines defines = {{"PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS", std::to_string(b.params)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM", std::to_string(b.frustum)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS", std::to_string(b.positions)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS", std::to_string(b.normals)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS", std::to_string(b.counts)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT", std::to_string(b.frustum_out)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS", std::to_string(b.offsets)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_HEADER", std::to_string(b.header)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS", std::to_string(b.list_positions)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS", std::to_string(b.list_ids)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS", std::to_string(b.sample_slots)},
+                             {"PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS", std::to_string(b.sample_texels)},
+                             {"PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH", std::to_string(b.depth_unit)},
+                             {"PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS", std::to_string(b.normal_unit)}};
+    if (sampleListsKernelPerInput(kernel)) {
+        defines.push_back({"PENUMBRA_SAMPLE_LISTS_INPUT", std::to_string(static_cast<uint32_t>(input))});
+    }
+    return defines;
+}
+
+/// What a step touches, by role: the integrator's ranges and textures (the executor's
+/// SampleListsBuffers, SampleBufferInput and SampleDepthInput members of the same name) and the
+/// constants buffer.
+enum class SampleListsResource : uint32_t {
+    None,
+    Params,         ///< uniform buffer holding plan.params (SampleListsParams, 256 bytes)
+    Frustum,        ///< SampleListsBuffers::frustum: SampleListsFrustum, a uniform block (and the fit's SSBO output)
+    Positions,      ///< SampleBufferInput::positions: vec4[sample_count]
+    Normals,        ///< SampleBufferInput::normals: vec4[sample_count] (bound only when culling)
+    DepthTexture,   ///< SampleDepthInput::depth_texture
+    NormalTexture,  ///< SampleDepthInput::normal_texture (bound only when culling)
+    Counts,         ///< SampleListsBuffers::counts: uint[W*H]
+    Offsets,        ///< SampleListsBuffers::offsets: uint[W*H]
+    ListPositions,  ///< SampleListsBuffers::list_positions: vec4[sample_count]
+    ListIds,        ///< SampleListsBuffers::list_ids: uint[sample_count]
+    SampleSlots,    ///< SampleListsBuffers::sample_slots: uint[sample_count]
+    SampleTexels,   ///< SampleListsBuffers::sample_texels: uint[sample_count]
+    Header,         ///< SampleListsBuffers::header: SampleListsHeader
+};
+
+inline const char* sampleListsResourceName(SampleListsResource r) {
+    switch (r) {
+        case SampleListsResource::None: return "none";
+        case SampleListsResource::Params: return "params";
+        case SampleListsResource::Frustum: return "frustum";
+        case SampleListsResource::Positions: return "positions";
+        case SampleListsResource::Normals: return "normals";
+        case SampleListsResource::DepthTexture: return "depth_texture";
+        case SampleListsResource::NormalTexture: return "normal_texture";
+        case SampleListsResource::Counts: return "counts";
+        case SampleListsResource::Offsets: return "offsets";
+        case SampleListsResource::ListPositions: return "list_positions";
+        case SampleListsResource::ListIds: return "list_ids";
+        case SampleListsResource::SampleSlots: return "sample_slots";
+        case SampleListsResource::SampleTexels: return "sample_texels";
+        case SampleListsResource::Header: return "header";
+    }
+    return "unknown";
+}
+
+/// How a dispatch sees a resource.
+enum class SampleListsBindingKind : uint32_t {
+    UniformBuffer,  ///< uniform block at binding `point` (GL_UNIFORM_BUFFER, glBindBufferRange)
+    StorageBuffer,  ///< shader-storage block at binding `point` (GL_SHADER_STORAGE_BUFFER)
+    Texture,        ///< sampler2D at texture unit `point`, read with texelFetch at level 0 (nearest, compare mode off)
+};
+
+/// One resource bound for one dispatch.
+struct SampleListsBinding {
+    SampleListsResource resource = SampleListsResource::None;
+    SampleListsBindingKind kind = SampleListsBindingKind::StorageBuffer;
+    uint32_t point = 0;  ///< binding index or texture unit (from SampleListsBindingPoints)
+    uint64_t bytes = 0;  ///< buffers: bytes from the start of the resource's range the pass may touch
+                         ///< (> 0; bind at least these); textures: 0
+};
+
+/// Memory barriers of a plan: a bit mask whose values are the GL bits themselves
+/// (static_cast<GLbitfield>(b) is what glMemoryBarrier takes; penumbra/gl/sample_lists.hpp
+/// static_asserts it).
+enum class SampleListsBarrier : uint32_t {
+    None = 0,
+    Uniform = 0x00000004u,       ///< GL_UNIFORM_BARRIER_BIT: shader writes -> reads as a uniform block
+    Command = 0x00000040u,       ///< GL_COMMAND_BARRIER_BIT: shader writes -> indirect draw/dispatch arguments
+    BufferUpdate = 0x00000200u,  ///< GL_BUFFER_UPDATE_BARRIER_BIT: shader writes -> copies, reads by the host
+    Storage = 0x00002000u,       ///< GL_SHADER_STORAGE_BARRIER_BIT: shader writes -> shader-storage reads/atomics
+};
+inline constexpr SampleListsBarrier operator|(SampleListsBarrier a, SampleListsBarrier b) {
+    return static_cast<SampleListsBarrier>(static_cast<uint32_t>(a) | static_cast<uint32_t>(b));
+}
+inline constexpr SampleListsBarrier operator&(SampleListsBarrier a, SampleListsBarrier b) {
+    return static_cast<SampleListsBarrier>(static_cast<uint32_t>(a) & static_cast<uint32_t>(b));
+}
+/// What build() leaves behind: the lists readable as SSBOs, the frustum as a uniform block, the
+/// header as indirect arguments, everything by the host.
+inline constexpr SampleListsBarrier kSampleListsEndBarriers =
+    SampleListsBarrier::Storage | SampleListsBarrier::Uniform | SampleListsBarrier::BufferUpdate |
+    SampleListsBarrier::Command;
+
+enum class SampleListsStepKind : uint32_t {
+    Upload,    ///< write a constants block to the start of `resource` (see "Recording a plan")
+    Clear,     ///< fill uints of `resource`
+    Dispatch,  ///< bind `bindings`, run `kernel` on `grid`
+    Scan,      ///< exclusive scan of `elements` uints, `resource` -> `output`: record plan.scan
+    Barrier,   ///< memory barrier `barriers`
+};
+
+inline const char* sampleListsStepKindName(SampleListsStepKind kind) {
+    switch (kind) {
+        case SampleListsStepKind::Upload: return "upload";
+        case SampleListsStepKind::Clear: return "clear";
+        case SampleListsStepKind::Dispatch: return "dispatch";
+        case SampleListsStepKind::Scan: return "scan";
+        case SampleListsStepKind::Barrier: return "barrier";
+    }
+    return "unknown";
+}
+
+/// Most bindings of one dispatch (the count and scatter passes: constants, input, four buffers).
+inline constexpr uint32_t kSampleListsMaxBindings = 8;
+/// Most steps of one build (17 with the fit and the statistics; room to spare).
+inline constexpr uint32_t kSampleListsMaxSteps = 24;
+
+/// One step of a plan; which fields matter depends on `kind`.
+struct SampleListsStep {
+    SampleListsStepKind kind = SampleListsStepKind::Barrier;
+    SampleListsResource resource = SampleListsResource::None;  ///< Upload, Clear: the target; Scan: its input (Counts)
+    SampleListsResource output = SampleListsResource::None;    ///< Scan: its output (Offsets)
+    uint32_t bytes = 0;        ///< Upload: bytes of the block (sizeof(SampleListsParams) or sizeof(SampleListsFrustum))
+    uint32_t first_word = 0;   ///< Clear: first uint of the resource's range
+    uint32_t words = 0;        ///< Clear: uints filled (> 0)
+    uint32_t value = 0;        ///< Clear: the value every one gets
+    uint32_t elements = 0;     ///< Scan: uints scanned (W * H == plan.scan.n)
+    SampleListsKernel kernel = SampleListsKernel::Count;  ///< Dispatch: its program (plan.program(kernel))
+    detail::DispatchGrid grid;                             ///< Dispatch: grid.x * grid.y * 1 work groups (never empty)
+    SampleListsBarrier barriers = SampleListsBarrier::None;  ///< Barrier: the bits
+    uint32_t binding_count = 0;                            ///< Dispatch: bindings[0 .. binding_count)
+    std::array<SampleListsBinding, kSampleListsMaxBindings> bindings{};  ///< Dispatch: everything it reads or writes
+};
+
+/// The steps of a plan: a fixed-capacity list (planning the steps allocates nothing).
+class SampleListsSteps {
+public:
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+    const SampleListsStep& operator[](size_t i) const { return steps_[i]; }
+    const SampleListsStep* begin() const { return steps_.data(); }
+    const SampleListsStep* end() const { return steps_.data() + size_; }
+    void clear() { size_ = 0; }
+    void push_back(const SampleListsStep& step) {
+        PENUMBRA_ASSERT(size_ < kSampleListsMaxSteps);
+        if (size_ < kSampleListsMaxSteps) steps_[size_++] = step;
+    }
+
+private:
+    std::array<SampleListsStep, kSampleListsMaxSteps> steps_{};
+    size_t size_ = 0;
+};
+
+/// An entry shader of a plan, as the GL executor compiles it.
+struct SampleListsProgram {
+    SampleListsKernel kernel = SampleListsKernel::Count;
+    const char* key = "";   ///< entry shader key (sampleListsKernelKey)
+    ShaderDefines defines;  ///< sampleListsKernelDefines(kernel, plan.input, bindings)
+};
+
+/// How the integrator binds and scans. Value-initialised = the sample_lists_shared.h binding
+/// points, default scan options, the GL minimum limits, ranges at byte offset 0.
+struct SampleListsPlanOptions {
+    SampleListsBindingPoints bindings;  ///< binding points of the plan's defines and bindings
+    ScanOptions scan;                   ///< options of the embedded scan plan (SampleListBuilder: scanner().options())
+    ScanLimits scan_limits;             ///< the driver's limits (penumbra::queryScanLimits() on GL)
+    uint64_t counts_offset = 0;         ///< byte offset of the Counts range in its buffer (scan bindings are absolute)
+    uint64_t offsets_offset = 0;        ///< byte offset of the Offsets range in its buffer
+};
+
+/// Everything one build does, without GL (see "Recording a plan").
+struct SampleListsPlan {
+    SampleListsInputKind input = SampleListsInputKind::Buffer;
+    SampleListsParams params{};    ///< constants block: the first step uploads it to Params; every dispatch binds it
+    SampleListsFrustum frustum{};  ///< the frustum block an Upload step writes to Frustum when not fitting
+                                   ///< (sampleListsFrustum(params)); with build.fit_frustum the
+                                   ///< fit_resolve dispatch writes it instead
+    std::vector<SampleListsProgram> programs;  ///< the entry shaders the dispatches use, once each, in first-use order
+    SampleListsSteps steps;        ///< in recording order
+    ScanPlan scan;                 ///< the Scan step: exclusive scan of W * H counts into offsets
+
+    /// The program of a kernel, or null when no dispatch uses it.
+    const SampleListsProgram* program(SampleListsKernel kernel) const {
+        for (const SampleListsProgram& p : programs) {
+            if (p.kernel == kernel) return &p;
+        }
+        return nullptr;
+    }
+};
+
+namespace detail {
+
+/// The steps of one build: the single definition of the pass list (planSampleLists returns it,
+/// SampleListBuilder::build walks it). Allocates and throws nothing; inputs assumed valid.
+inline void planSampleListsSteps(const SampleListsSetup& setup, const SampleListsBuild& build,
+                                 SampleListsInputKind input, bool cull_back_facing, const SampleListsBindingPoints& b,
+                                 SampleListsSteps& steps) {
+    using R = SampleListsResource;
+    using K = SampleListsBindingKind;
+    steps.clear();
+    const uint64_t n = setup.sample_count;
+    const uint64_t per_sample4 = n * 4, per_sample16 = n * 16;
+    auto upload = [&](R resource, uint32_t bytes) {
+        SampleListsStep s;
+        s.kind = SampleListsStepKind::Upload;
+        s.resource = resource;
+        s.bytes = bytes;
+        steps.push_back(s);
+    };
+    auto clear = [&](R resource, uint32_t first_word, uint32_t words, uint32_t value) {
+        SampleListsStep s;
+        s.kind = SampleListsStepKind::Clear;
+        s.resource = resource;
+        s.first_word = first_word;
+        s.words = words;
+        s.value = value;
+        steps.push_back(s);
+    };
+    auto barrier = [&](SampleListsBarrier bits) {
+        SampleListsStep s;
+        s.kind = SampleListsStepKind::Barrier;
+        s.barriers = bits;
+        steps.push_back(s);
+    };
+    struct Dispatch {
+        SampleListsStep step;
+        Dispatch& bind(R resource, K kind, uint32_t point, uint64_t bytes) {
+            PENUMBRA_ASSERT(step.binding_count < kSampleListsMaxBindings);
+            if (step.binding_count < kSampleListsMaxBindings) {
+                step.bindings[step.binding_count++] = SampleListsBinding{resource, kind, point, bytes};
+            }
+            return *this;
+        }
+    };
+    auto dispatch = [&](SampleListsKernel kernel, const DispatchGrid& grid) {
+        Dispatch d;
+        d.step.kind = SampleListsStepKind::Dispatch;
+        d.step.kernel = kernel;
+        d.step.grid = grid;
+        d.bind(R::Params, K::UniformBuffer, b.params, sizeof(SampleListsParams));
+        return d;
+    };
+    auto bindInput = [&](Dispatch& d) {
+        if (input == SampleListsInputKind::Buffer) {
+            d.bind(R::Positions, K::StorageBuffer, b.positions, per_sample16);
+            if (cull_back_facing) d.bind(R::Normals, K::StorageBuffer, b.normals, per_sample16);
+        } else {
+            d.bind(R::DepthTexture, K::Texture, b.depth_unit, 0);
+            if (cull_back_facing) d.bind(R::NormalTexture, K::Texture, b.normal_unit, 0);
+        }
+    };
+    const uint64_t frustum_bytes = sizeof(SampleListsFrustum), header_bytes = setup.header_bytes;
+
+    upload(R::Params, sizeof(SampleListsParams));
+    // §3.1: "we initialize the local lists' lengths in the SM to zero".
+    clear(R::Counts, 0, setup.lists, 0u);
+    clear(R::Header, PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORD, PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORDS, 0u);
+    if (build.fit_frustum) {
+        // §4.3 on the GPU: keys -> header, then the crop -> frustum (as an SSBO), read below as a UBO.
+        clear(R::Header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MIN_WORD, 2, 0xFFFFFFFFu);
+        clear(R::Header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MAX_WORD, 6, 0u);
+        if (n) {
+            Dispatch fit = dispatch(SampleListsKernel::Fit, setup.sample_groups);
+            bindInput(fit);
+            fit.bind(R::Header, K::StorageBuffer, b.header, header_bytes);
+            steps.push_back(fit.step);
+        }
+        barrier(SampleListsBarrier::Storage);
+        DispatchGrid one;
+        one.x = one.y = 1;
+        one.groups = 1;
+        Dispatch resolve = dispatch(SampleListsKernel::FitResolve, one);
+        resolve.bind(R::Header, K::StorageBuffer, b.header, header_bytes)
+            .bind(R::Frustum, K::StorageBuffer, b.frustum_out, frustum_bytes);
+        steps.push_back(resolve.step);
+        barrier(SampleListsBarrier::Storage | SampleListsBarrier::Uniform);
+    } else {
+        upload(R::Frustum, sizeof(SampleListsFrustum));
+    }
+    // Pass 1: count.
+    if (n) {
+        Dispatch count = dispatch(SampleListsKernel::Count, setup.sample_groups);
+        count.bind(R::Frustum, K::UniformBuffer, b.frustum, frustum_bytes);
+        bindInput(count);
+        count.bind(R::Counts, K::StorageBuffer, b.counts, setup.counts_bytes)
+            .bind(R::Header, K::StorageBuffer, b.header, header_bytes)
+            .bind(R::SampleSlots, K::StorageBuffer, b.sample_slots, per_sample4)
+            .bind(R::SampleTexels, K::StorageBuffer, b.sample_texels, per_sample4);
+        steps.push_back(count.step);
+    }
+    // Pass 2: offsets = exclusive scan of the lengths (§3.1, [HSO07]); the scan's own barriers
+    // make pass 1's counts visible.
+    SampleListsStep scan;
+    scan.kind = SampleListsStepKind::Scan;
+    scan.resource = R::Counts;
+    scan.output = R::Offsets;
+    scan.elements = setup.lists;
+    steps.push_back(scan);
+    barrier(SampleListsBarrier::Storage);
+    // Pass 3: scatter.
+    if (n) {
+        Dispatch scatter = dispatch(SampleListsKernel::Scatter, setup.sample_groups);
+        bindInput(scatter);
+        scatter.bind(R::Offsets, K::StorageBuffer, b.offsets, setup.offsets_bytes)
+            .bind(R::ListPositions, K::StorageBuffer, b.list_positions, per_sample16)
+            .bind(R::ListIds, K::StorageBuffer, b.list_ids, per_sample4)
+            .bind(R::SampleSlots, K::StorageBuffer, b.sample_slots, per_sample4)
+            .bind(R::SampleTexels, K::StorageBuffer, b.sample_texels, per_sample4);
+        steps.push_back(scatter.step);
+    }
+    if (build.statistics) {
+        barrier(SampleListsBarrier::Storage);
+        clear(R::Header, PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 4, 0u);
+        Dispatch statistics = dispatch(SampleListsKernel::Statistics, setup.list_groups);
+        statistics.bind(R::Counts, K::StorageBuffer, b.counts, setup.counts_bytes)
+            .bind(R::Header, K::StorageBuffer, b.header, header_bytes);
+        steps.push_back(statistics.step);
+    }
+    barrier(kSampleListsEndBarriers);
+}
+
+}  // namespace detail
+
+/// Pure setup of one build as data (see "Recording a plan"): the constants blocks, the programs,
+/// the steps and the scan plan. `view` only (and always) for the depth input. Throws
+/// penumbra::Error for what sampleListsParams rejects, a missing or superfluous view, and scan
+/// options or limits planScan rejects. Allocates (programs, scan plan): a load-time call.
+inline SampleListsPlan planSampleLists(const SampleListsSetup& setup, const SampleListsLight& light,
+                                       const SampleListsOptions& options, const SampleListsBuild& build,
+                                       SampleListsInputKind input, const SampleListsView* view = nullptr,
+                                       const SampleListsPlanOptions& plan_options = {}) {
+    PENUMBRA_CHECK(input == SampleListsInputKind::Buffer || input == SampleListsInputKind::Depth,
+                   "penumbra::planSampleLists: input kind ", static_cast<uint32_t>(input),
+                   " is neither Buffer nor Depth");
+    PENUMBRA_CHECK(input == SampleListsInputKind::Depth || view == nullptr,
+                   "penumbra::planSampleLists: a view is only for the depth input");
+    PENUMBRA_CHECK(input == SampleListsInputKind::Buffer || view != nullptr,
+                   "penumbra::planSampleLists: the depth input needs its view (width, height, inverse "
+                   "view-projection)");
+    SampleListsPlan plan;
+    plan.input = input;
+    plan.params = sampleListsParams(setup, light, options, view, build.fit);
+    plan.frustum = sampleListsFrustum(plan.params);
+    plan.scan = planScan(setup.lists, plan_options.scan, plan_options.scan_limits, ScanKind::Exclusive,
+                         plan_options.counts_offset, plan_options.offsets_offset);
+    detail::planSampleListsSteps(setup, build, input, options.cull_back_facing, plan_options.bindings, plan.steps);
+    for (const SampleListsStep& step : plan.steps) {
+        if (step.kind != SampleListsStepKind::Dispatch || plan.program(step.kernel)) continue;
+        plan.programs.push_back({step.kernel, sampleListsKernelKey(step.kernel),
+                                 sampleListsKernelDefines(step.kernel, input, plan_options.bindings)});
+    }
+    return plan;
 }
 
 }  // namespace penumbra

@@ -12,6 +12,11 @@
 //             keys into the header, fit_resolve.comp.glsl writes the cropped frustum into
 //             buffers.frustum, which the count pass reads as a uniform block — nothing travels
 //             through the CPU) and the Fig. 9 statistics after when build.statistics is set.
+//             It walks the steps planSampleLists (penumbra/sample_lists.hpp) returns as data —
+//             one definition of the pass list, planned on the stack per build — binding every
+//             resource of a dispatch right before it (SampleListsBindings: the plan's binding
+//             points plus the scanner's); planOptions() gives planSampleLists this builder's
+//             bindings, scan options and limits, for an engine that records the plan itself.
 //             It allocates nothing, queries nothing, reads nothing back and throws nothing; a
 //             range too small or misaligned, a grid larger than reserved or invalid light/view
 //             numbers return a Status other than Ok (after PENUMBRA_ASSERT) before any GL call.
@@ -48,22 +53,17 @@
 
 namespace penumbra {
 
-/// Binding points of the builder's kernels; value-initialised = the sample_lists_shared.h defaults.
-struct SampleListsBindings {
-    uint32_t params = PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS;    ///< uniform block
-    uint32_t frustum = PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM;  ///< uniform block (count pass)
-    uint32_t positions = PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS;  ///< SSBOs from here on
-    uint32_t normals = PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS;
-    uint32_t counts = PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS;
-    uint32_t frustum_out = PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT;
-    uint32_t offsets = PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS;
-    uint32_t header = PENUMBRA_SAMPLE_LISTS_BINDING_HEADER;
-    uint32_t list_positions = PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS;
-    uint32_t list_ids = PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS;
-    uint32_t sample_slots = PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS;
-    uint32_t sample_texels = PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS;
-    uint32_t depth_unit = PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH;    ///< texture units (depth input)
-    uint32_t normal_unit = PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS;
+// The plan's barrier bits are GL's own.
+static_assert(static_cast<GLbitfield>(SampleListsBarrier::Uniform) == GL_UNIFORM_BARRIER_BIT &&
+                  static_cast<GLbitfield>(SampleListsBarrier::Command) == GL_COMMAND_BARRIER_BIT &&
+                  static_cast<GLbitfield>(SampleListsBarrier::BufferUpdate) == GL_BUFFER_UPDATE_BARRIER_BIT &&
+                  static_cast<GLbitfield>(SampleListsBarrier::Storage) == GL_SHADER_STORAGE_BARRIER_BIT,
+              "SampleListsBarrier values must be the GL barrier bits");
+
+/// Binding points of the builder's kernels (SampleListsBindingPoints: params, frustum, ...,
+/// depth_unit, normal_unit; value-initialised = the sample_lists_shared.h defaults) and the
+/// scanner's.
+struct SampleListsBindings : SampleListsBindingPoints {
     ScanBindings scan{};  ///< the scanner's pass 2 bindings
 };
 
@@ -92,13 +92,6 @@ struct SampleListsBuffers {
     BufferRange frustum;         ///< SampleListsFrustum: read by the count pass (and your light pass)
 };
 
-/// Per-build switches of the executor. Value-initialised = lists only, the light's own frustum.
-struct SampleListsBuild {
-    bool fit_frustum = false;  ///< §4.3 on the GPU before the lists (writes buffers.frustum)
-    LightFrustumFitOptions fit;
-    bool statistics = false;   ///< Fig. 9 words of the header after the lists
-};
-
 namespace detail {
 
 inline void clearWords(const BufferRange& range, uint32_t first_word, uint32_t words, uint32_t value) {
@@ -110,6 +103,8 @@ inline void clearWords(const BufferRange& range, uint32_t first_word, uint32_t w
 inline void dispatch(const DispatchGrid& grid) {
     if (grid.groups) glDispatchCompute(grid.x, grid.y, 1);
 }
+
+inline GLbitfield glBarrierBits(SampleListsBarrier barriers) { return static_cast<GLbitfield>(barriers); }
 
 inline void validateTexture(GLuint id, const SampleListsView& view, const char* what, const char* function) {
     PENUMBRA_CHECK(id != 0 && glIsTexture(id), "penumbra::", function, ": ", what, " (", id,
@@ -133,10 +128,11 @@ public:
     explicit SampleListBuilder(const ShaderLibrary& library = ShaderLibrary::embedded(), const ScanOptions& scan = {},
                                const SampleListsBindings& bindings = {}, const ShaderDefines& extra_defines = {})
         : bindings_(bindings), scanner_(scan, library, bindings.scan) {
-        for (int kernel = 0; kernel < kKernels; ++kernel) {
-            const bool per_input = kernel == kCount || kernel == kScatter || kernel == kFit;
-            for (int input = 0; input < (per_input ? 2 : 1); ++input) {
-                programs_[kernel][input] = buildKernel(Kernel(kernel), input, library, extra_defines);
+        for (uint32_t kernel = 0; kernel < kSampleListsKernels; ++kernel) {
+            const auto k = static_cast<SampleListsKernel>(kernel);
+            for (uint32_t input = 0; input < (sampleListsKernelPerInput(k) ? 2u : 1u); ++input) {
+                programs_[kernel][input] =
+                    buildKernel(k, static_cast<SampleListsInputKind>(input), library, extra_defines);
             }
         }
         params_ = gl::Buffer(sizeof(SampleListsParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -153,7 +149,7 @@ public:
             release();
             bindings_ = other.bindings_;
             scanner_ = std::move(other.scanner_);
-            for (int k = 0; k < kKernels; ++k) {
+            for (uint32_t k = 0; k < kSampleListsKernels; ++k) {
                 for (int i = 0; i < 2; ++i) programs_[k][i] = std::move(other.programs_[k][i]);
             }
             params_ = std::move(other.params_);
@@ -206,8 +202,8 @@ public:
         if (s == Status::Ok) s = checkOutputs(setup, out, build);
         if (s == Status::Ok && !detail::sampleListsParamsValid(setup, light, nullptr, build.fit)) s = Status::InvalidArgument;
         if (s != Status::Ok) return fail(s);
-        run(setup, detail::makeSampleListsParams(setup, light, options, nullptr, build.fit), 0,
-            [&] { bindBufferInput(input, options); }, out, build);
+        run(setup, detail::makeSampleListsParams(setup, light, options, nullptr, build.fit),
+            SampleListsInputKind::Buffer, &input, nullptr, out, options, build);
         return Status::Ok;
     }
 
@@ -223,8 +219,8 @@ public:
             s = Status::InvalidArgument;
         }
         if (s != Status::Ok) return fail(s);
-        run(setup, detail::makeSampleListsParams(setup, light, options, &input.view, build.fit), 1,
-            [&] { bindDepthInput(input, options); }, out, build);
+        run(setup, detail::makeSampleListsParams(setup, light, options, &input.view, build.fit),
+            SampleListsInputKind::Depth, nullptr, &input, out, options, build);
         return Status::Ok;
     }
 
@@ -260,18 +256,27 @@ public:
     }
 
     const SampleListsBindings& bindings() const { return bindings_; }
+    /// The options planSampleLists needs to describe this builder's builds (its binding points,
+    /// its scanner's options and the driver's limits) for ranges at the given byte offsets.
+    SampleListsPlanOptions planOptions(uint64_t counts_offset = 0, uint64_t offsets_offset = 0) const {
+        SampleListsPlanOptions o;
+        o.bindings = bindings_;
+        o.scan = scanner_.options();
+        o.scan_limits = scanner_.limits();
+        o.counts_offset = counts_offset;
+        o.offsets_offset = offsets_offset;
+        return o;
+    }
     const Scanner& scanner() const { return scanner_; }
     /// GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT: every SSBO range offset must be a multiple.
     uint32_t storageAlignment() const { return ssbo_alignment_; }
 
 private:
-    enum Kernel { kCount, kScatter, kFit, kFitResolve, kStatistics, kKernels };
-    static constexpr GLbitfield kEndBarriers = GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT |
-                                               GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT;
+    static constexpr GLbitfield kEndBarriers = static_cast<GLbitfield>(kSampleListsEndBarriers);
 
     SampleListsBindings bindings_;
     Scanner scanner_;
-    gl::Program programs_[kKernels][2];
+    gl::Program programs_[kSampleListsKernels][2];  ///< [kernel][input kind]; per-input kernels only use both
     gl::Buffer params_;
     GLuint sampler_ = 0;
     uint32_t ssbo_alignment_ = 256, ubo_alignment_ = 256;
@@ -287,32 +292,11 @@ private:
         return s;
     }
 
-    gl::Program buildKernel(Kernel kernel, int input, const ShaderLibrary& library, const ShaderDefines& extra) const {
-        static const char* const keys[kKernels] = {
-            "penumbra/sample_lists/count.comp.glsl", "penumbra/sample_lists/scatter.comp.glsl",
-            "penumbra/sample_lists/fit.comp.glsl", "penumbra/sample_lists/fit_resolve.comp.glsl",
-            "penumbra/sample_lists/statistics.comp.glsl"};
-        const SampleListsBindings& b = bindings_;
-        ShaderDefines defines = {
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_PARAMS", std::to_string(b.params)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM", std::to_string(b.frustum)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_POSITIONS", std::to_string(b.positions)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_NORMALS", std::to_string(b.normals)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_COUNTS", std::to_string(b.counts)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_FRUSTUM_OUT", std::to_string(b.frustum_out)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_OFFSETS", std::to_string(b.offsets)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_HEADER", std::to_string(b.header)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_LIST_POSITIONS", std::to_string(b.list_positions)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_LIST_IDS", std::to_string(b.list_ids)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_SLOTS", std::to_string(b.sample_slots)},
-            {"PENUMBRA_SAMPLE_LISTS_BINDING_SAMPLE_TEXELS", std::to_string(b.sample_texels)},
-            {"PENUMBRA_SAMPLE_LISTS_UNIT_DEPTH", std::to_string(b.depth_unit)},
-            {"PENUMBRA_SAMPLE_LISTS_UNIT_NORMALS", std::to_string(b.normal_unit)}};
-        if (kernel == kCount || kernel == kScatter || kernel == kFit) {
-            defines.push_back({"PENUMBRA_SAMPLE_LISTS_INPUT", std::to_string(input)});
-        }
+    gl::Program buildKernel(SampleListsKernel kernel, SampleListsInputKind input, const ShaderLibrary& library,
+                            const ShaderDefines& extra) const {
+        ShaderDefines defines = sampleListsKernelDefines(kernel, input, bindings_);
         defines.insert(defines.end(), extra.begin(), extra.end());
-        return gl::buildComputeProgram(keys[kernel], defines, library);
+        return gl::buildComputeProgram(sampleListsKernelKey(kernel), defines, library);
     }
 
     void validateOutputs(const SampleListsSetup& setup, const SampleListsBuffers& out) const {
@@ -361,20 +345,6 @@ private:
         return Status::Ok;
     }
 
-    void bindBufferInput(const SampleBufferInput& input, const SampleListsOptions& options) const {
-        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.positions, input.positions);
-        if (options.cull_back_facing) gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.normals, input.normals);
-    }
-
-    void bindDepthInput(const SampleDepthInput& input, const SampleListsOptions& options) const {
-        glBindTextureUnit(bindings_.depth_unit, input.depth_texture);
-        glBindSampler(bindings_.depth_unit, sampler_);
-        if (options.cull_back_facing) {
-            glBindTextureUnit(bindings_.normal_unit, input.normal_texture);
-            glBindSampler(bindings_.normal_unit, sampler_);
-        }
-    }
-
     void upload(const SampleListsParams& params) {
         glNamedBufferSubData(params_.id(), 0, sizeof params, &params);
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.params, params_.id());
@@ -382,75 +352,85 @@ private:
 
     void runStatistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {
         detail::clearWords(lists.header, PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 4, 0u);
-        programs_[kStatistics][0].use();
+        programs_[static_cast<uint32_t>(SampleListsKernel::Statistics)][0].use();
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists.counts);
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists.header);
         detail::dispatch(setup.list_groups);
     }
 
-    template <typename BindInput>
-    void run(const SampleListsSetup& setup, const SampleListsParams& params, int input, BindInput&& bind_input,
-             const SampleListsBuffers& out, const SampleListsBuild& build) {
-        upload(params);
-        // §3.1: "we initialize the local lists' lengths in the SM to zero".
-        detail::clearWords(out.counts, 0, setup.lists, 0u);
-        detail::clearWords(out.header, PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORD,
-                           PENUMBRA_SAMPLE_LISTS_HEADER_COUNTERS_WORDS, 0u);
-        if (build.fit_frustum) {
-            // §4.3 on the GPU: keys → header, then the crop → frustum (as an SSBO), read below as a UBO.
-            detail::clearWords(out.header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MIN_WORD, 2, 0xFFFFFFFFu);
-            detail::clearWords(out.header, PENUMBRA_SAMPLE_LISTS_HEADER_FIT_MAX_WORD, 6, 0u);
-            if (setup.sample_count) {
-                programs_[kFit][input].use();
-                bind_input();
-                gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, out.header);
-                detail::dispatch(setup.sample_groups);
+    /// The range a plan resource names (Params: the builder's own uniform buffer).
+    BufferRange rangeOf(SampleListsResource r, const SampleBufferInput* in, const SampleListsBuffers& out) const {
+        using R = SampleListsResource;
+        switch (r) {
+            case R::Params: return {params_.id(), 0, sizeof(SampleListsParams)};
+            case R::Frustum: return out.frustum;
+            case R::Positions: return in ? in->positions : BufferRange{};
+            case R::Normals: return in ? in->normals : BufferRange{};
+            case R::Counts: return out.counts;
+            case R::Offsets: return out.offsets;
+            case R::ListPositions: return out.list_positions;
+            case R::ListIds: return out.list_ids;
+            case R::SampleSlots: return out.sample_slots;
+            case R::SampleTexels: return out.sample_texels;
+            case R::Header: return out.header;
+            default: return {};
+        }
+    }
+
+    // One build: walks the plan's steps (detail::planSampleListsSteps, the same list
+    // planSampleLists returns), planned on the stack — no allocation, no query, no exception.
+    void run(const SampleListsSetup& setup, const SampleListsParams& params, SampleListsInputKind input,
+             const SampleBufferInput* buffer_input, const SampleDepthInput* depth_input, const SampleListsBuffers& out,
+             const SampleListsOptions& options, const SampleListsBuild& build) {
+        SampleListsSteps steps;
+        detail::planSampleListsSteps(setup, build, input, options.cull_back_facing, bindings_, steps);
+        for (const SampleListsStep& step : steps) {
+            switch (step.kind) {
+                case SampleListsStepKind::Upload:
+                    if (step.resource == SampleListsResource::Params) {
+                        glNamedBufferSubData(params_.id(), 0, sizeof params, &params);
+                    } else {
+                        const SampleListsFrustum f = sampleListsFrustum(params);
+                        glNamedBufferSubData(out.frustum.buffer, static_cast<GLintptr>(out.frustum.offset), sizeof f,
+                                             &f);
+                    }
+                    break;
+                case SampleListsStepKind::Clear:
+                    detail::clearWords(rangeOf(step.resource, buffer_input, out), step.first_word, step.words,
+                                       step.value);
+                    break;
+                case SampleListsStepKind::Dispatch: {
+                    const uint32_t kernel = static_cast<uint32_t>(step.kernel);
+                    programs_[kernel][sampleListsKernelPerInput(step.kernel) ? static_cast<uint32_t>(input) : 0u].use();
+                    for (uint32_t i = 0; i < step.binding_count; ++i) {
+                        const SampleListsBinding& b = step.bindings[i];
+                        if (b.kind == SampleListsBindingKind::Texture) {
+                            const GLuint texture = b.resource == SampleListsResource::DepthTexture
+                                                       ? depth_input->depth_texture
+                                                       : depth_input->normal_texture;
+                            glBindTextureUnit(b.point, texture);
+                            glBindSampler(b.point, sampler_);
+                            continue;
+                        }
+                        const GLenum target = b.kind == SampleListsBindingKind::UniformBuffer ? GL_UNIFORM_BUFFER
+                                                                                             : GL_SHADER_STORAGE_BUFFER;
+                        gl::bindRange(target, b.point, rangeOf(b.resource, buffer_input, out).sub(0, b.bytes));
+                    }
+                    glDispatchCompute(step.grid.x, step.grid.y, 1);
+                    break;
+                }
+                case SampleListsStepKind::Scan: {
+                    const uint64_t bytes = uint64_t(step.elements) * 4;
+                    const Status scanned =
+                        scanner_.exclusive(rangeOf(step.resource, buffer_input, out).sub(0, bytes),
+                                           rangeOf(step.output, buffer_input, out).sub(0, bytes), step.elements);
+                    PENUMBRA_ASSERT(scanned == Status::Ok);
+                    (void)scanned;
+                    break;
+                }
+                case SampleListsStepKind::Barrier: glMemoryBarrier(detail::glBarrierBits(step.barriers)); break;
             }
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            programs_[kFitResolve][0].use();
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, out.header);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.frustum_out, out.frustum.sub(0, sizeof(SampleListsFrustum)));
-            glDispatchCompute(1, 1, 1);
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT);
-        } else {
-            const SampleListsFrustum f = sampleListsFrustum(params);
-            glNamedBufferSubData(out.frustum.buffer, static_cast<GLintptr>(out.frustum.offset), sizeof f, &f);
         }
-        gl::bindRange(GL_UNIFORM_BUFFER, bindings_.frustum, out.frustum.sub(0, sizeof(SampleListsFrustum)));
-        // Pass 1: count.
-        if (setup.sample_count) {
-            programs_[kCount][input].use();
-            bind_input();
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.counts, out.counts);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, out.header);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sample_slots, out.sample_slots);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sample_texels, out.sample_texels);
-            detail::dispatch(setup.sample_groups);
-        }
-        // Pass 2: offsets = exclusive scan of the lengths (§3.1, [HSO07]); the scanner issues the
-        // barrier that makes pass 1's counts visible.
-        const Status scanned = scanner_.exclusive(out.counts.sub(0, setup.counts_bytes),
-                                                  out.offsets.sub(0, setup.offsets_bytes), setup.lists);
-        PENUMBRA_ASSERT(scanned == Status::Ok);
-        (void)scanned;
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        // Pass 3: scatter (the scanner left its own uniform/SSBO bindings: bind ours again).
-        if (setup.sample_count) {
-            programs_[kScatter][input].use();
-            glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.params, params_.id());
-            bind_input();
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, out.offsets);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.list_positions, out.list_positions);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.list_ids, out.list_ids);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sample_slots, out.sample_slots);
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sample_texels, out.sample_texels);
-            detail::dispatch(setup.sample_groups);
-        }
-        if (build.statistics) {
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            runStatistics(setup, out);
-        }
-        glMemoryBarrier(kEndBarriers);
     }
 };
 
