@@ -176,11 +176,6 @@ penumbra::SampleListsBuild withFit() {
     b.fit_frustum = true;
     return b;
 }
-penumbra::SampleListsBuild withStatistics() {
-    penumbra::SampleListsBuild b;
-    b.statistics = true;
-    return b;
-}
 
 void setStatistics(benchmark::State& state, const penumbra::SampleListStatistics& s, const std::string& suffix = "") {
     state.counters["occupancy" + suffix] = 100.0 * s.occupancy();

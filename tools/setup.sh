@@ -17,6 +17,7 @@ packages=(
   libepoxy-dev                       # a second GL loader, for the consumer test
   libgmp-dev                         # exact rational signs in blocker_filter_test
   libmeshoptimizer-dev               # support/scene/weld.hpp: welding split vertices (bent normals)
+  python3-matplotlib                 # tools/plot_bench.py, tools/plot_lut_error.py (their ctest plots)
 )
 
 missing=()
