@@ -4,7 +4,7 @@
 //   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
 //                [--mode reference|soft|hard] [--reference] [--out FILE.png] [--json] [--no-ground]
-//                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--grid G]
+//                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--rotations R] [--grid G]
 //
 // Modes
 //   reference (default): every view sample's visibility of N light samples from the exact
@@ -98,6 +98,7 @@ struct Args {
     std::string lut = "exact";           // soft mode: exact | lut | brute (penumbra::SoftMode)
     uint32_t lut_res = 64;               // soft mode: LUT resolution R (R x R x R texels per table)
     uint32_t sets = 4;                   // soft mode: K light-sample sets, chosen per pixel
+    uint32_t rotations = 8;              // soft mode: R rotation steps about the light's axis, per pixel
     uint32_t grid = 256;                 // soft mode: light grid G x G (lists and influence regions)
 };
 
@@ -105,7 +106,7 @@ struct Args {
 struct RawArgs {
     std::string light_pos, light_radius, samples = "64", width = "512", height = "384", origin;
     std::string frames = "1", frames_reference = "4096";
-    std::string lut_res = "64", sets = "4", grid = "256";
+    std::string lut_res = "64", sets = "4", grid = "256", rotations = "8";
     bool no_ground = false;
 };
 
@@ -141,6 +142,7 @@ const ModeFlag kModeFlags[] = {
     {"--lut", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
     {"--lut-res", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
     {"--sets", false, false, true, "only the GPU soft-shadow pipeline chooses light-sample sets per pixel"},
+    {"--rotations", false, false, true, "only the GPU soft-shadow pipeline rotates light samples per pixel"},
     {"--grid", false, false, true, "only the GPU soft-shadow pipeline has a separate light grid"},
 };
 
@@ -205,6 +207,11 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
         ->capture_default_str();
     app.add_option("--sets", raw.sets, "soft mode: K light-sample sets, 1..64, chosen per pixel (neighbours differ for K >= 4)")
         ->type_name("K")
+        ->capture_default_str();
+    app.add_option("--rotations", raw.rotations,
+                   "soft mode: R rotation steps of the light samples about the light's axis, 1..256, one chosen per pixel "
+                   "(sintorn2008 §4.2 jitter; 1 = none)")
+        ->type_name("R")
         ->capture_default_str();
     app.add_option("--grid", raw.grid, "soft mode: light grid G x G of the sample lists and influence regions, 16..4096")
         ->type_name("G")
@@ -278,6 +285,7 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
     if (a.lut_res % 2 != 0) usageError("--lut-res must be even, got '", raw.lut_res, "'");
     a.sets = parseCount(raw.sets, "--sets", 1, 64);
     a.grid = parseCount(raw.grid, "--grid", 16, 4096);
+    a.rotations = parseCount(raw.rotations, "--rotations", 1, 256);
     a.width = parseCount(raw.width, "--width", 1, 16384);
     a.height = parseCount(raw.height, "--height", 1, 16384);
     if (!raw.light_radius.empty()) {
@@ -849,7 +857,8 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                                     : args.lut == "lut" ? penumbra::SoftMode::Lut
                                                         : penumbra::SoftMode::Brute;
 
-    // Light samples: K sets of N, one chosen per pixel (penumbra/light_samples.hpp).
+    // Light samples: K sets of N, one set and one of R rotation steps chosen per pixel
+    // (sampleBasedSoftSelection; the oracle gets each pixel's rotated samples).
     auto t0 = std::chrono::steady_clock::now();
     penumbra::Light light;
     light.center = light_pos;
@@ -858,9 +867,12 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     sample_options.count = n;
     sample_options.sets = k;
     const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    const uint32_t rotations = args.rotations;
+    const std::vector<glm::dvec4> sample_table = penumbra::sampleBasedSoftSampleTable(sets, rotations);
     std::vector<uint32_t> pixel_sets(size_t(w) * h);
     for (uint32_t y = 0; y < h; ++y)
-        for (uint32_t x = 0; x < w; ++x) pixel_sets[size_t(y) * w + x] = penumbra::lightSampleSet(x, y, 0, k);
+        for (uint32_t x = 0; x < w; ++x)
+            pixel_sets[size_t(y) * w + x] = penumbra::sampleBasedSoftSelection(x, y, 0, k, rotations);
 
     // The light grid: a frustum from the light centre around the view samples, cropped to them by
     // the §4.3 fit (the sample-list block's CPU twin, on the very floats the GPU tests: an engine
@@ -898,6 +910,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::SampleBasedSoftGpuOptions options;
     options.mode = mode;
     options.grid_width = options.grid_height = args.grid;
+    options.rotations = rotations;
     options.timings = true;
     // The coplanar rule of the hard pipeline: above float rounding of surface points (1e-7) or of
     // positions rebuilt from a 32-bit depth buffer (kDepthCoplanarEpsilon).
@@ -992,17 +1005,19 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         oracle_visible = visible;
         uint64_t total_bits = 0, ties = 0, mismatched = 0, mismatched_samples = 0, compared = 0;
         double squares = 0;
-        for (uint32_t s = 0; s < k; ++s) {
+        for (uint32_t g = 0; g < k * rotations; ++g) {
+            const uint32_t word = (g / rotations) | (g % rotations) << 8;  // set, rotation step
             std::vector<size_t> members;
             std::vector<glm::dvec3> points;
             for (size_t i = 0; i < visible.size(); ++i) {
-                if (!v.surface(i) || gpu_visibility[i] < 0.0f || pixel_sets[i] != s || v.positions[i].w == 0.0f) continue;
+                if (!v.surface(i) || gpu_visibility[i] < 0.0f || pixel_sets[i] != word || v.positions[i].w == 0.0f) continue;
                 members.push_back(i);
                 points.emplace_back(v.positions[i]);
             }
             if (members.empty()) continue;
-            const std::string what = "oracle check, set " + std::to_string(s + 1) + " of " + std::to_string(k);
-            const std::vector<glm::dvec3> samples(sets.worldSet(s), sets.worldSet(s) + n);
+            const std::string what = "oracle check, group " + std::to_string(g + 1) + " of " + std::to_string(k * rotations);
+            std::vector<glm::dvec3> samples;
+            for (uint32_t i = 0; i < n; ++i) samples.emplace_back(sample_table[size_t(g) * n + i]);
             const penumbra::reference::VisibilityResult truth = evaluateWithProgress(oracle, points, samples, vo, what.c_str());
             for (size_t m = 0; m < members.size(); ++m) {
                 const size_t i = members[m];
@@ -1057,6 +1072,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         j["view_samples"] = v.count;
         j["light_samples"] = n;
         j["light_sample_sets"] = k;
+        j["light_sample_rotations"] = rotations;
         j["light"] = {{"position", vec3Json(light_pos)}, {"radius", light_radius}};
         j["mean_visible_fraction"] = tested ? visible_sum / double(tested) : 0.0;
         j["soft"] = {{"lut", args.lut},
