@@ -688,6 +688,23 @@ void shadeGpuImages(const GpuViewSamples& v, const MergedScene& merged, const gl
     }
 }
 
+/// A pipeline's frame: one warm-up run, then one timed (glFinish, wall clock). Milliseconds, or -1
+/// after printing the Status a run returned.
+template <typename Run>
+double timedFrame(const Run& run, const char* pipeline) {
+    penumbra::Status status = run();  // warm-up
+    double ms = 0;
+    if (status == penumbra::Status::Ok) {
+        const auto t0 = std::chrono::steady_clock::now();
+        status = run();
+        glFinish();
+        ms = msSince(t0);
+    }
+    if (status == penumbra::Status::Ok) return ms;
+    std::fprintf(stderr, "soft_shadows: the %s pipeline returned '%s'\n", pipeline, penumbra::statusName(status));
+    return -1;
+}
+
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
             const MergedScene& merged, const glm::dvec3& light_pos, double load_ms,
@@ -726,15 +743,9 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     };
     if (depth_input) pipeline.validate(depth_samples);
     else pipeline.validate(buffer_input, w * h);
-    run();  // warm-up
+    const double shadows_ms = timedFrame(run, "hard-shadow");
+    if (shadows_ms < 0) return 1;
     auto t0 = std::chrono::steady_clock::now();
-    const penumbra::Status status = run();
-    glFinish();
-    const double shadows_ms = msSince(t0);
-    if (status != penumbra::Status::Ok) {
-        std::fprintf(stderr, "soft_shadows: the hard-shadow pipeline returned '%s'\n", penumbra::statusName(status));
-        return 1;
-    }
     const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
     const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, size_t(w) * h);
 
@@ -958,15 +969,8 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     else pipeline.validate(buffer_input, w * h, lut_table, frame_buffers);
     std::fprintf(stderr, "soft_shadows: GPU soft shadows (%s, N = %u, %u x %u samples, grid %u^2)...\n", args.lut.c_str(), n, w,
                  h, args.grid);
-    run();  // warm-up
-    t0 = std::chrono::steady_clock::now();
-    const penumbra::Status status = run();
-    glFinish();
-    const double shadows_ms = msSince(t0);
-    if (status != penumbra::Status::Ok) {
-        std::fprintf(stderr, "soft_shadows: the soft-shadow pipeline returned '%s'\n", penumbra::statusName(status));
-        return 1;
-    }
+    const double shadows_ms = timedFrame(run, "soft-shadow");
+    if (shadows_ms < 0) return 1;
     const penumbra::SampleBasedSoftFrame frame = pipeline.readFrame();
     const std::vector<float> gpu_visibility = pipeline.readVisibility();
     const uint32_t words = pipeline.wordsPerSample();
