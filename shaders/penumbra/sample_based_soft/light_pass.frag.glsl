@@ -129,6 +129,14 @@ bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
 void main() {
     const PenumbraSbsParams P = penumbraSbsParams;
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), P.grid.w, P.grid.z);
+    if (range.y == 0u) {
+        // An empty list block (an empty texel, or past its list's end): nothing to test, so none
+        // of the caster's per-fragment setup below (about half the light pass's fragments).
+#if PENUMBRA_SBS_COUNT_WORK
+        atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
+#endif
+        return;
+    }
     const dvec3 v0 = dvec3(penumbraSbsVertex0), v1 = dvec3(penumbraSbsVertex1), v2 = dvec3(penumbraSbsVertex2);
     const uint mode = P.config.x, n = P.config.y, words = P.config.w, tables = P.counts.z;
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
@@ -139,14 +147,10 @@ void main() {
     // ... and so does the squared distance from the light's centre to T (can a light sample come
     // within the oracle's coplanar reach of T?).
     const double light_distance2 = penumbraAfhPointTriangleDistance2(P.center.xyz, v0, v1, v2);
-    // Distance from T's plane to the nearest light point (<= 0: the light may straddle it); the
-    // twin's rounding allowance.
-    const dvec3 normal = penumbraSbsCross(v1 - v0, v2 - v0);
-    const double normal_length = penumbraSbsLength(normal);
+    // Distance from T's plane to the nearest light point (<= 0: the light may straddle it), with
+    // the twin's rounding allowance: computed on the first pair that needs it (p in T's plane).
+    double normal_length = -1.0LF;
     precise double light_gap = 0.0LF;
-    if (normal_length > 0.0LF)
-        light_gap = (abs(penumbraSbsDot(normal, P.center.xyz - v0)) / normal_length -
-                     4.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(P.center.xyz - v0)) * (1.0LF - 1e-9LF) - P.bounds.x;
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
@@ -183,6 +187,14 @@ void main() {
             const double det = penumbraSbsDot(a, penumbraSbsCross(b, c));
             precise double det_bound = 16.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b) * penumbraSbsLength(c);
             if (!(abs(det) > det_bound)) {
+                if (normal_length < 0.0LF) {
+                    const dvec3 normal = penumbraSbsCross(v1 - v0, v2 - v0);
+                    normal_length = penumbraSbsLength(normal);
+                    if (normal_length > 0.0LF)
+                        light_gap = (abs(penumbraSbsDot(normal, P.center.xyz - v0)) / normal_length -
+                                     4.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(P.center.xyz - v0)) * (1.0LF - 1e-9LF) -
+                                    P.bounds.x;
+                }
                 // p in T's plane up to rounding, the whole light on one side: T blocks nothing for p
                 // (the twin's argument: the segment meets the plane within delta * L / gap of p,
                 // outside T).
