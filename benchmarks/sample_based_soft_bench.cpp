@@ -303,7 +303,7 @@ struct Ours {
           pipeline(options(m, count_work), c.sets, m == SoftMode::Brute ? nullptr : &lut.setup, c.influence, c.view_projection),
           input(view.input()),
           table(m == SoftMode::Brute ? penumbra::BufferRange{} : penumbra::BufferRange{lut.table.id(), 0, lut.table.size()}),
-          draw([&view] { view.gpu->draw(); }) {
+          draw([&view](penumbra::CasterClass c) { view.gpu->drawClass(c == penumbra::CasterClass::Closed); }) {
         pipeline.reserve(v.count);
         pipeline.validate(input, v.count, table);
     }

@@ -202,7 +202,9 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
                 const penumbra::SbsFrameBuffers frame{{sets_buffer.id(), 0, sets_buffer.size()}, {}, {}};
                 pipeline.validate(input, uint32_t(points.size()), lut_table, frame);
                 REQUIRE(pipeline.run(input, uint32_t(points.size()), mode == penumbra::SoftMode::Brute ? penumbra::BufferRange{} : lut_table,
-                                     [&] { gpu_mesh.draw(); }, frame) == Status::Ok);
+                                     [&](penumbra::CasterClass c) {
+                                         if (c == penumbra::CasterClass::Open) gpu_mesh.draw();
+                                     }, frame) == Status::Ok);
                 const std::vector<uint32_t> masks = pipeline.readMasks();
                 const std::vector<float> visibility = pipeline.readVisibility();
                 const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
@@ -314,7 +316,7 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
     const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
     const penumbra::gl::Buffer table(seed_lut.tableBytes());
     const penumbra::BufferRange lut_table{table.id(), 0, table.size()};
-    auto draw = [] {};
+    auto draw = [](penumbra::CasterClass) {};
 #ifdef NDEBUG
     CHECK(pipeline.run(input, 4, lut_table, draw) == Status::NotReserved);
     pipeline.reserve(4);
@@ -367,7 +369,9 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
     io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
     const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
     const penumbra::SampleBufferInput input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
-    const penumbra::SampleBasedSoftShadows::DrawCasters draw = [&] { gpu.draw(); };  // built once, outside the frame
+    const penumbra::SampleBasedSoftShadows::DrawCasters draw = [&](penumbra::CasterClass c) {
+        gpu.drawClass(c == penumbra::CasterClass::Closed);
+    };  // built once, outside the frame
 
     std::vector<uint32_t> reference_masks;
     for (const uint32_t list_block : {16u, 2u}) {
@@ -499,7 +503,7 @@ TEST_CASE("GPU sample-based soft: depth-reconstructed view samples, exact == ora
     penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
     pipeline.reserve(count);
     pipeline.validate(input, lut_table);
-    REQUIRE(pipeline.run(input, lut_table, [&] { gpu.draw(); }) == Status::Ok);
+    REQUIRE(pipeline.run(input, lut_table, [&](penumbra::CasterClass c) { gpu.drawClass(c == penumbra::CasterClass::Closed); }) == Status::Ok);
     const std::vector<uint32_t> masks = pipeline.readMasks();
     const std::vector<float> visibility = pipeline.readVisibility();
     const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();

@@ -39,6 +39,7 @@
 #include "penumbra/conservative_raster.hpp"
 #include "penumbra/detail/blocker_filter.hpp"
 #include "penumbra/detail/geometry.hpp"
+#include "penumbra/pipelines/caster_class.hpp"
 #include "penumbra/sample_lists.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -61,7 +62,6 @@ static_assert(sizeof(shared::PenumbraAfhSpillWorldHeader) == 16 && sizeof(shared
               "std430 layout light_pass.geom.glsl assumes: a uvec4 header, three vec4 per spilled triangle");
 
 enum class AfhPrecision { Exact, Fast };
-enum class CasterClass { Closed, Open };
 
 /// Value-initialised = defaults, except the grid size, which must be set.
 struct AliasFreeHardOptions {
@@ -95,6 +95,14 @@ struct AliasFreeHardOptions {
     /// measured: 1 of 150 209 samples of the torus knot at 512x384). Use it when closed meshes
     /// are watertight and such creases are rare or invisible; leave it off for exact results.
     bool back_faces_only = false;
+    /// The exact cull of closed casters (SoftSkips::closed_casters' argument with a point light):
+    /// closed casters cast only their triangles that do not face away from the light; a triangle
+    /// with the light strictly behind its plane (beyond the rounding bound of
+    /// detail::afhFacesAway) is culled once in the geometry stage. A blocked segment leaves the
+    /// solid it crosses through a face with the light in front, so no bit changes (the tests
+    /// compare on and off bit for bit); about half of a closed mesh's triangles go. Not with
+    /// back_faces_only (the two keep opposite halves).
+    bool light_facing_only = false;
     /// ConservativeVariant::Fixed6 only: the two-pass light pass (default) — a direct pass whose
     /// geometry stage declares the seed's max_vertices = 6 (sintorn2008 §3.2; the declared output
     /// size sets GS throughput on real GPUs) and an indirect spill pass (max_vertices 13) for the
@@ -240,6 +248,9 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
                        o.grid_height <= kSampleListsMaxGridSide,
                    "penumbra::AliasFreeHardShadows: grid ", o.grid_width, "x", o.grid_height, " is outside [1, ",
                    kSampleListsMaxGridSide, "]");
+    PENUMBRA_CHECK(!(o.back_faces_only && o.light_facing_only),
+                   "penumbra::AliasFreeHardShadows: back_faces_only and light_facing_only keep opposite halves of a "
+                   "closed caster; set at most one");
     PENUMBRA_CHECK(o.coplanar_epsilon >= 0 && o.coplanar_epsilon <= 0.1,
                    "penumbra::AliasFreeHardShadows: coplanar_epsilon ", o.coplanar_epsilon, " is outside [0, 0.1]");
     PENUMBRA_CHECK(o.sample_offset >= 0 && std::isfinite(o.sample_offset),
@@ -350,10 +361,25 @@ struct AfhCasters {
 namespace detail {
 /// The light pass's class culling (light_pass.geom.glsl): with back_faces_only, a closed caster's
 /// triangle that does not face away from the light casts nothing (§3.3).
+/// light_facing_only's test (light_pass.geom.glsl, step for step): facing = n . to_light with
+/// n = (b - a) x (c - a) in double from floats is off by at most (dn + 8 eps |n|) |to_light|,
+/// dn = 8 eps |b - a| |c - a|; the light is strictly behind when facing is below minus that.
+inline bool afhFacesAway(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& to_light) {
+    constexpr double eps = 0x1.0p-53;
+    const glm::dvec3 e0 = b - a, e1 = c - a;
+    const glm::dvec3 n(mulRounded(e0.y, e1.z) - mulRounded(e0.z, e1.y), mulRounded(e0.z, e1.x) - mulRounded(e0.x, e1.z),
+                       mulRounded(e0.x, e1.y) - mulRounded(e0.y, e1.x));
+    const double facing = dotRounded(n, to_light);
+    const double bound = (8.0 * eps * std::sqrt(dotRounded(e0, e0)) * std::sqrt(dotRounded(e1, e1)) +
+                          8.0 * eps * std::sqrt(dotRounded(n, n))) * std::sqrt(dotRounded(to_light, to_light));
+    return facing < -bound * (1.0 + 1e-9);
+}
+
 inline bool afhCulled(const AliasFreeHardOptions& options, bool closed, const glm::vec3 (&v)[3], const glm::vec4& light) {
-    if (!closed || !options.back_faces_only) return false;
+    if (!closed || !(options.back_faces_only || options.light_facing_only)) return false;
     const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
     const glm::dvec3 to_light = light.w != 0.0f ? glm::dvec3(light) - a : glm::dvec3(light);
+    if (options.light_facing_only) return afhFacesAway(a, b, c, to_light);
     return glm::dot(glm::cross(b - a, c - a), to_light) >= 0.0;
 }
 }  // namespace detail

@@ -54,6 +54,7 @@
 #define PENUMBRA_PIPELINES_SAMPLE_BASED_SOFT_HPP
 
 #include "penumbra/detail/geometry.hpp"
+#include "penumbra/pipelines/caster_class.hpp"
 #include "penumbra/error.hpp"
 #include "penumbra/light_lut.hpp"
 #include "penumbra/light_samples.hpp"
@@ -87,6 +88,37 @@ inline const char* softModeName(SoftMode mode) {
     return mode == SoftMode::Exact ? "exact" : mode == SoftMode::Lut ? "lut" : mode == SoftMode::Brute ? "brute" : "?";
 }
 
+/// Work the pipeline may skip (sintorn2008 §4.3, "skip what a scene doesn't need"). Each skip
+/// leaves every mask bit of Exact and Brute unchanged (the argument is with each flag; the tests
+/// compare masks with each skip on and off, bit for bit, on every built-in and shared scene); Lut
+/// is an approximation whose bits may move with the plane cut. Value-initialised = all on.
+struct SoftSkips {
+    /// GPU only: a light-pass fragment whose list block is empty returns before the caster's
+    /// per-fragment setup (about half the fragments of a typical frame). Counted:
+    /// fragments_skipped.
+    bool empty_blocks = true;
+    /// Casters drawn as CasterClass::Closed (watertight, consistently outward-oriented meshes, as
+    /// scene::Mesh::closed promises; unions of such meshes qualify) cast only their triangles that
+    /// do not face away from the whole light: a triangle with the light's bounding sphere strictly
+    /// behind its plane (beyond the rounding bound of detail::soft::casterPlane) is culled once, in the geometry
+    /// stage. Why nothing changes: a segment from a receiver p to a light sample l that meets a
+    /// closed mesh must leave the mesh's solid before it reaches l (l lies outside every solid), and
+    /// the face it leaves through has l strictly in front (winding number: entering faces raise it,
+    /// leaving faces lower it, and it ends at 0); culled faces have every light sample behind, so
+    /// the face that blocks the segment is always kept. (The seed's opposite choice, light-facing
+    /// triangles culled, loses receivers whose segment enters the solid right at the receiver:
+    /// self-shadowed receivers, concave creases.) Counted: triangles_culled.
+    bool closed_casters = true;
+    /// A (receiver p, caster T) pair is skipped before its edge planes are built when p and the
+    /// whole light lie strictly on the same side of T's plane, each farther from it than the
+    /// oracle's reach at that pair (2 max(tie, coplanar epsilon) * scale) plus the rounding bound:
+    /// the segment never comes near T's plane, so neither the geometry nor any rule of the oracle
+    /// makes T block a light sample (sintorn2008 §4.3's supporting-plane cut, per pair; the
+    /// influence region's own cut is InfluenceRegionOptions::cut_by_supporting_plane).
+    /// Counted: pairs_cut.
+    bool plane_cut = true;
+};
+
 /// Value-initialised = defaults.
 struct SampleBasedSoftOptions {
     SoftMode mode = SoftMode::Exact;
@@ -98,6 +130,8 @@ struct SampleBasedSoftOptions {
     /// samples are its set's rotated by r / R turns (sintorn2008 §4.2's per-pixel jitter). The
     /// oracle's samples are sampleBasedSoftSampleTable's.
     uint32_t rotations = 1;
+    /// closed_casters and plane_cut (empty_blocks is the GPU's); the masks do not change.
+    SoftSkips skips{};
 };
 
 /// Casters: indexed triangles (float positions, as the GPU sees them).
@@ -106,6 +140,8 @@ struct SoftCasters {
     size_t vertex_count = 0;
     const uint32_t* indices = nullptr;  ///< 3 per triangle
     size_t triangle_count = 0;
+    /// Per triangle: nonzero = its mesh is closed (drawn as CasterClass::Closed); null = all open.
+    const uint8_t* closed = nullptr;
 };
 
 /// Receivers (view samples): float positions and, optionally, the selection word of each
@@ -180,6 +216,8 @@ struct SampleBasedSoftCpuResult {
     uint64_t bits = 0;              ///< pair bits evaluated (pairs x N)
     uint64_t uncertain_bits = 0;    ///< Exact: pair bits the LUT could not vouch for
     uint64_t exact_tests = 0;       ///< per-sample oracle verdicts computed
+    uint64_t triangles_culled = 0;  ///< SoftSkips::closed_casters: casters culled (each counted once)
+    uint64_t pairs_cut = 0;         ///< SoftSkips::plane_cut: pairs skipped (not in `pairs`)
 
     bool blocked(size_t r, uint32_t s) const { return (masks[r * words_per_receiver + s / 32] >> (s % 32)) & 1u; }
     uint32_t blockedCount(size_t r) const {
@@ -221,6 +259,50 @@ inline LocalPlane localPlane(const LightFrame& frame, const glm::dvec3& origin, 
     out.plane = frame.planeToLocal(glm::dvec4(n, w));
     out.proven = error <= budget;
     return out;
+}
+
+/// A caster's supporting plane against the light, for the skips (the GPU's light_pass.geom.glsl
+/// and light_pass.frag.glsl compute the same, step for step). normal = (v1 - v0) x (v2 - v0) in
+/// double from the float vertices; a signed distance dot(normal, x - v0) / |normal| is off by at
+/// most (dn + 4 eps |normal|) |x - v0| / |normal| with dn = 8 eps |v1 - v0| |v2 - v0| (localPlane's
+/// bound), shrunk by another 1e-9 relative for the divisions.
+struct CasterPlane {
+    glm::dvec3 v0{0.0}, normal{0.0};
+    double normal_length = 0.0;
+    double error_per_unit = 0.0;  ///< (dn + 4 eps |normal|) / |normal|: error per unit of |x - v0|
+    double light_side = 0.0;      ///< dot(normal, centre - v0): the light centre's side
+    /// The light's clearance: every light point lies on light_side's side, at least this far from
+    /// the plane (<= 0: not proven; the light may straddle the plane).
+    double light_clearance = 0.0;
+};
+
+inline CasterPlane casterPlane(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& centre,
+                               double light_reach) {
+    CasterPlane c;
+    c.v0 = v0;
+    const glm::dvec3 e0 = v1 - v0, e1 = v2 - v0;
+    c.normal = oracle::cross3(e0, e1);
+    c.normal_length = oracle::length3(c.normal);
+    if (!(c.normal_length > 0.0) || !std::isfinite(c.normal_length)) return c;
+    const double dn = 8.0 * kEpsilon * oracle::length3(e0) * oracle::length3(e1);
+    c.error_per_unit = (dn + 4.0 * kEpsilon * c.normal_length) / c.normal_length;
+    const glm::dvec3 to_centre = centre - v0;
+    c.light_side = oracle::dot3(c.normal, to_centre);
+    c.light_clearance =
+        (std::fabs(c.light_side) / c.normal_length - c.error_per_unit * oracle::length3(to_centre)) * (1.0 - 1e-9) - light_reach;
+    return c;
+}
+
+/// SoftSkips::closed_casters: the whole light strictly behind the plane (culled when closed).
+inline bool casterFacesAway(const CasterPlane& c) { return c.light_side < 0.0 && c.light_clearance > 0.0; }
+
+/// SoftSkips::plane_cut: p and the whole light strictly on one side, both farther than `reach`.
+inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double reach) {
+    if (!(c.light_clearance > reach)) return false;
+    const glm::dvec3 to_p = p - c.v0;
+    const double side = oracle::dot3(c.normal, to_p);
+    const double clearance = (std::fabs(side) / c.normal_length - c.error_per_unit * oracle::length3(to_p)) * (1.0 - 1e-9);
+    return clearance > reach && (side > 0.0) == (c.light_side > 0.0);
 }
 
 }  // namespace detail::soft
@@ -300,6 +382,22 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                            : 0.0;
     }
 
+    // The skips' view of each caster's plane; culled casters (closed, facing away from the light).
+    const bool cull = options.skips.closed_casters && casters.closed != nullptr, cut = options.skips.plane_cut;
+    std::vector<soft::CasterPlane> caster_planes(cull || cut ? casters.triangle_count : 0);
+    std::vector<uint8_t> culled(casters.triangle_count, 0);
+    for (size_t t = 0; t < caster_planes.size(); ++t) {
+        const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
+        const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
+        const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
+        if (detail::degenerateTriangle(v0, v1, v2)) continue;
+        caster_planes[t] = soft::casterPlane(v0, v1, v2, frame.center, light_reach);
+        if (cull && casters.closed[t] != 0 && soft::casterFacesAway(caster_planes[t])) {
+            culled[t] = 1;
+            ++result.triangles_culled;
+        }
+    }
+
     for (size_t r = 0; r < receivers.count; ++r) {
         const glm::dvec3 p(receivers.positions[r]);
         const uint32_t word = receivers.sets ? receivers.sets[r] : 0u;
@@ -316,7 +414,14 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
             const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
             const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
-            if (detail::degenerateTriangle(v0, v1, v2)) continue;
+            if (detail::degenerateTriangle(v0, v1, v2) || culled[t]) continue;
+            // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
+            const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
+            const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
+            if (cut && soft::casterPlaneCuts(caster_planes[t], p, 2.0 * eps * scale_hi)) {
+                ++result.pairs_cut;
+                continue;
+            }
             ++result.pairs;
             result.bits += n;
             oracle::Triangle tri{v0, v1, v2, static_cast<uint32_t>(t)};
@@ -331,9 +436,6 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                     if (decide(s)) out[s / 32] |= 1u << (s % 32);
                 continue;
             }
-            // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
-            const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
-            const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
             bool unproven = false, near = false;
             const double distance2 = detail::pointTriangleDistance2<double>(p, v0, v1, v2);
             {
@@ -468,6 +570,9 @@ struct SampleBasedSoftGpuOptions {
     /// Rotation steps about the light's local z, picked per view sample by its selection word
     /// (SampleBasedSoftOptions::rotations; 1 = none).
     uint32_t rotations = 1;
+    /// Work skips (each leaves Exact's and Brute's masks unchanged): SoftSkips. closed_casters acts
+    /// on the draws of CasterClass::Closed only.
+    SoftSkips skips{};
     bool count_work = true;  ///< work counters (atomics in the light pass)
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
@@ -492,10 +597,12 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    " must be in [1, 256]");
 }
 
-/// The light-pass parameter block for list block `block` (the host fills one slot per block).
-/// `lut` may be null in Brute mode. Throws penumbra::Error when the LUT does not fit the sets.
+/// The light-pass parameter block for list block `block` and one caster class (the host fills one
+/// slot per block and class; `closed`: the draw's casters are CasterClass::Closed). `lut` may be
+/// null in Brute mode. Throws penumbra::Error when the LUT does not fit the sets.
 inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const LightSampleSets& sets,
-                                       const LightLutSetup* lut, uint32_t sample_count, uint32_t block, bool has_sets) {
+                                       const LightLutSetup* lut, uint32_t sample_count, uint32_t block, bool has_sets,
+                                       bool closed = false) {
     const uint32_t n = sets.count(), k = sets.sets();
     if (o.mode != SoftMode::Brute) {
         PENUMBRA_CHECK(lut != nullptr, "penumbra::SampleBasedSoftShadows: mode ", softModeName(o.mode), " needs a LUT");
@@ -522,7 +629,10 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
                           has_sets ? 1u : 0u);
     PENUMBRA_CHECK(o.rotations == 1 || f.symmetric, "penumbra::SampleBasedSoftShadows: rotations = ", o.rotations,
                    " needs a light symmetric about its local z axis (sphere, disk, ellipsoid with equal x and y)");
-    p.reserved = glm::uvec4(o.rotations, 0u, 0u, 0u);
+    const uint32_t flags = (o.skips.empty_blocks ? PENUMBRA_SBS_FLAG_SKIP_EMPTY : 0u) |
+                           (o.skips.closed_casters && closed ? PENUMBRA_SBS_FLAG_CULL_CLOSED : 0u) |
+                           (o.skips.plane_cut ? PENUMBRA_SBS_FLAG_PLANE_CUT : 0u);
+    p.reserved = glm::uvec4(o.rotations, flags, 0u, 0u);
     if (lut) p.lut = lut->params;
     return p;
 }

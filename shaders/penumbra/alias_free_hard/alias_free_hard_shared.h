@@ -62,6 +62,7 @@
 
 // Light-pass flags (params.grid.w).
 #define PENUMBRA_AFH_FLAG_CLOSED 1u  // the draw's casters are closed meshes: only light-back-facing cast
+#define PENUMBRA_AFH_FLAG_CLOSED_LIGHT_FACING 2u  // closed meshes: triangles with the light strictly behind are culled
 
 // Work counters (words of the work buffer). OVERFLOW is always counted (by the resolve).
 #define PENUMBRA_AFH_WORK_FRAGMENTS 0

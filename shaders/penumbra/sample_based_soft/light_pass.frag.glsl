@@ -64,21 +64,7 @@ layout(location = 0) flat in vec3 penumbraSbsVertex0;
 layout(location = 1) flat in vec3 penumbraSbsVertex1;
 layout(location = 2) flat in vec3 penumbraSbsVertex2;
 
-const double kPenumbraSbsEpsilon = 1.1102230246251565404e-16LF;  // 2^-53
-
-double penumbraSbsMaxAbs(dvec3 v) {
-    const dvec3 m = abs(v);
-    return max(m.x, max(m.y, m.z));
-}
-double penumbraSbsDot(dvec3 a, dvec3 b) {
-    precise double r = (a.x * b.x + a.y * b.y) + a.z * b.z;
-    return r;
-}
-dvec3 penumbraSbsCross(dvec3 a, dvec3 b) {
-    precise dvec3 r = dvec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-    return r;
-}
-double penumbraSbsLength(dvec3 a) { return sqrt(penumbraSbsDot(a, a)); }
+#include "penumbra/sample_based_soft/caster_plane.glsl"
 
 // LightFrame::planeToLocal: world plane dot(n, x) + w = 0 -> unit local normal and offset (the
 // signed distance of the light centre in normalised units). Zero normal -> 0 (nothing behind).
@@ -129,17 +115,23 @@ bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
 void main() {
     const PenumbraSbsParams P = penumbraSbsParams;
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), P.grid.w, P.grid.z);
-    if (range.y == 0u) {
-        // An empty list block (an empty texel, or past its list's end): nothing to test, so none
-        // of the caster's per-fragment setup below (about half the light pass's fragments).
+    if (range.y == 0u && (P.reserved.y & PENUMBRA_SBS_FLAG_SKIP_EMPTY) != 0u) {
+        // SoftSkips::empty_blocks: an empty list block (an empty texel, or past its list's end) has
+        // nothing to test, so none of the caster's per-fragment setup below (about half the light
+        // pass's fragments). Off: the same setup as any fragment, then an empty walk.
 #if PENUMBRA_SBS_COUNT_WORK
         atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
+        atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED], 1u);
 #endif
         return;
     }
     const dvec3 v0 = dvec3(penumbraSbsVertex0), v1 = dvec3(penumbraSbsVertex1), v2 = dvec3(penumbraSbsVertex2);
     const uint mode = P.config.x, n = P.config.y, words = P.config.w, tables = P.counts.z;
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
+    // SoftSkips::plane_cut: T's plane against the light, once per fragment.
+    const bool plane_cut = (P.reserved.y & PENUMBRA_SBS_FLAG_PLANE_CUT) != 0u;
+    PenumbraSbsCasterPlane caster;
+    if (plane_cut) caster = penumbraSbsCasterPlane(v0, v1, v2, P.center.xyz, P.bounds.x);
     // T's plane depends on T alone: built once per fragment, oriented per sample by negation (which
     // commutes exactly with every operation of penumbraSbsLocalPlane: the same bits as building it
     // flipped).
@@ -151,7 +143,7 @@ void main() {
     // the twin's rounding allowance: computed on the first pair that needs it (p in T's plane).
     double normal_length = -1.0LF;
     precise double light_gap = 0.0LF;
-    uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u;
+    uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const uint id = penumbraSampleListsId(slot);
@@ -160,15 +152,20 @@ void main() {
         if (set >= P.config.z) set = 0u;    // out of range: set 0 (the CPU twin rejects it)
         if (turn_step >= P.reserved.x) turn_step = 0u;  // ... unrotated
         const uint mask_base = id * words, sample_base = (set * P.reserved.x + turn_step) * n;
+        // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
+        const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
+        const double centre_reach = penumbraSbsMaxAbs(P.center.xyz - p);
+        const double s_min = max(0.0LF, centre_reach - P.bounds.x), s_max = centre_reach + P.bounds.x;
+        const double scale_lo = max(scale_v, s_min), scale_hi = max(scale_v, s_max);
+        precise double cut_reach = 2.0LF * P.epsilon.z * scale_hi;
+        if (plane_cut && penumbraSbsCasterPlaneCuts(caster, p, cut_reach)) {
+            ++cut;  // SoftSkips::plane_cut: p and the whole light on one side of T's plane
+            continue;
+        }
         ++pairs;
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
         PenumbraSbsPlane planes[4];
         if (!all_exact) {
-            // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
-            const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
-            const double centre_reach = penumbraSbsMaxAbs(P.center.xyz - p);
-            const double s_min = max(0.0LF, centre_reach - P.bounds.x), s_max = centre_reach + P.bounds.x;
-            const double scale_lo = max(scale_v, s_min), scale_hi = max(scale_v, s_max);
             const double distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
             precise double ignore = P.epsilon.x * scale_lo;
             if (distance2 < ignore * ignore * (1.0LF - 1e-9LF)) {  // the oracle ignores T for every sample
@@ -288,5 +285,6 @@ void main() {
     if (uncertain_bits != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_UNCERTAIN_BITS], uncertain_bits);
     if (tests != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_EXACT_TESTS], tests);
     if (unproven_planes != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PLANES_UNPROVEN], unproven_planes);
+    if (cut != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_CUT], cut);
 #endif
 }

@@ -4,12 +4,18 @@
 // dilation, whole-grid fallbacks) emitted as a strip into the W x H grid viewport; the triangle's
 // world vertices travel flat to the fragment stage. Degenerate triangles (the one rule,
 // penumbra/alias_free_hard/degenerate.glsl) cast nothing and are culled here.
-// Defines: the influence setup's (PENUMBRA_INFLUENCE_SIDES, PENUMBRA_INFLUENCE_CUT).
+// Defines: the influence setup's (PENUMBRA_INFLUENCE_SIDES, PENUMBRA_INFLUENCE_CUT), PENUMBRA_SBS_COUNT_WORK.
+// Closed casters' triangles with the whole light behind them are culled here (SoftSkips::closed_casters).
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1
 #include "penumbra/influence_region/influence_region_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 #include "penumbra/alias_free_hard/degenerate.glsl"
+#include "penumbra/sample_based_soft/caster_plane.glsl"
+
+#ifndef PENUMBRA_SBS_COUNT_WORK
+#define PENUMBRA_SBS_COUNT_WORK 1
+#endif
 
 #ifndef PENUMBRA_INFLUENCE_SIDES
 #define PENUMBRA_INFLUENCE_SIDES PENUMBRA_INFLUENCE_DEFAULT_SIDES
@@ -22,6 +28,13 @@ layout(std140, binding = PENUMBRA_SBS_INFLUENCE_BINDING) uniform PenumbraSbsInfl
     PenumbraInfluenceParams penumbraSbsInfluence;
 };
 
+layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
+    PenumbraSbsParams penumbraSbsParams;
+};
+#if PENUMBRA_SBS_COUNT_WORK
+layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
+#endif
+
 #include "penumbra/influence_region/influence_region.glsl"
 
 layout(location = 0) flat out vec3 penumbraSbsVertex0;
@@ -31,6 +44,18 @@ layout(location = 2) flat out vec3 penumbraSbsVertex2;
 void main() {
     const vec3 v0 = gl_in[0].gl_Position.xyz, v1 = gl_in[1].gl_Position.xyz, v2 = gl_in[2].gl_Position.xyz;
     if (penumbraAfhDegenerate(dvec3(v0), dvec3(v1), dvec3(v2))) return;
+    if ((penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULL_CLOSED) != 0u) {
+        // SoftSkips::closed_casters: of a closed caster, a triangle with the whole light strictly
+        // behind its plane is never the face a blocked segment leaves the solid through: culled.
+        const PenumbraSbsCasterPlane c =
+            penumbraSbsCasterPlane(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz, penumbraSbsParams.bounds.x);
+        if (penumbraSbsCasterFacesAway(c)) {
+#if PENUMBRA_SBS_COUNT_WORK
+            if (penumbraSbsParams.grid.w == 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+#endif
+            return;
+        }
+    }
     const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
     const vec2 half_grid = 0.5 * penumbraSbsInfluence.grid.xy;
     // The convex polygon as a zig-zag strip: 0, 1, n-1, 2, n-2, ... (as influence_region.geom.glsl).

@@ -79,7 +79,18 @@
 #define PENUMBRA_SBS_WORK_EXACT_TESTS 5      // per-(view sample, light sample) exact tests
 #define PENUMBRA_SBS_WORK_OVERFLOW 6         // samples left untested past the last list block (resolve)
 #define PENUMBRA_SBS_WORK_PLANES_UNPROVEN 7  // exact: planes whose rounding bound exceeded the budget
-#define PENUMBRA_SBS_WORK_WORDS 8
+// Skips (penumbra::SoftSkips): the work each removed.
+#define PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED 8  // fragments of empty list blocks that returned at once
+#define PENUMBRA_SBS_WORK_TRIANGLES_CULLED 9   // closed casters' triangles facing away from the whole light
+                                               // (counted in list block 0 only)
+#define PENUMBRA_SBS_WORK_PAIRS_CUT 10         // pairs whose receiver and light lie on one side of the caster
+#define PENUMBRA_SBS_WORK_WORDS 12
+
+// Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.
+#define PENUMBRA_SBS_FLAG_SKIP_EMPTY 1u      // empty list blocks return before the caster's setup
+#define PENUMBRA_SBS_FLAG_CULL_CLOSED 2u     // this draw's casters are closed: cull triangles the whole
+                                             // light is strictly behind
+#define PENUMBRA_SBS_FLAG_PLANE_CUT 4u       // skip pairs with p and the light on one side of T's plane
 
 #ifdef __cplusplus
 namespace penumbra::shared {  // C++: include penumbra/light_lut.hpp first (PenumbraLutParams)
@@ -100,7 +111,7 @@ struct PenumbraSbsParams {
     uvec4 config;       // x = mode, y = N (samples per set), z = K (sets), w = words per view sample
     uvec4 counts;       // x = sample count, y = samples per list walked (max_list_blocks * list block),
                         // z = tables per set, w = 1 when a per-sample set buffer is bound
-    uvec4 reserved;     // x = R (rotation steps about local z; 1 = none)
+    uvec4 reserved;     // x = R (rotation steps about local z; 1 = none), y = PENUMBRA_SBS_FLAG_* bits
     PenumbraLutParams lut;
 };
 

@@ -28,7 +28,8 @@
 //             occlusion query, surviving when the longest list needs that block, (4) light pass:
 //             for each block b < max_list_blocks, under glBeginConditionalRender(query b), every
 //             caster drawn into a W x H framebuffer with no attachments; the geometry stage culls
-//             (closed casters with back_faces_only: only light-back-facing triangles, §3.3) and
+//             (closed casters with back_faces_only: only light-back-facing triangles, §3.3; with
+//             light_facing_only: only those that do not face away from the light, exact) and
 //             emits the triangle's conservative coverage; each fragment walks its texel's list
 //             block and ORs the shadow bit of every sample the triangle blocks (4 planes), (5)
 //             resolve. Nothing is read back, queried, allocated or thrown: misuse returns a Status.
@@ -328,8 +329,12 @@ private:
         put(0, afhParams(options_, light, 0, 0u, setup_.sample_count));
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             for (uint32_t c = 0; c < 2; ++c) {
-                const bool cull = c == 0 && options_.back_faces_only;  // c == 0: closed casters
-                put(1 + 2 * b + c, afhParams(options_, light, b, cull ? PENUMBRA_AFH_FLAG_CLOSED : 0u, setup_.sample_count));
+                // c == 0: closed casters
+                const uint32_t flags = c != 0                     ? 0u
+                                       : options_.back_faces_only   ? PENUMBRA_AFH_FLAG_CLOSED
+                                       : options_.light_facing_only ? PENUMBRA_AFH_FLAG_CLOSED_LIGHT_FACING
+                                                                    : 0u;
+                put(1 + 2 * b + c, afhParams(options_, light, b, flags, setup_.sample_count));
             }
         }
         glNamedBufferSubData(afh_params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());

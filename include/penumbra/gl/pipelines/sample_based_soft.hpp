@@ -31,8 +31,12 @@
 //             generateLightLut uploaded) as a BufferRange; optionally a selection word per sample
 //             id naming its light-sample set and rotation step (sampleBasedSoftSelection per
 //             pixel; empty = set 0, unrotated; options.rotations steps); a callback that
-//             draws every caster (positions through penumbraAfhCasterPosition(), attribute 0 by
-//             default) while the pipeline's light-pass program is bound.
+//             draws every caster of the CasterClass it is given (positions through
+//             penumbraAfhCasterPosition(), attribute 0 by default) while the pipeline's light-pass
+//             program is bound: Closed = watertight outward-oriented meshes (SoftSkips::
+//             closed_casters culls their triangles that face away from the whole light), Open =
+//             the rest. options.skips: the work skips (SoftSkips), none of which changes a bit of
+//             Exact or Brute.
 //   produces: per view-sample id `words = ceil(N / 32)` mask words (bit s of word id * words +
 //             s / 32: light sample s of its set blocked) in masks() or your range, and the visible
 //             fraction 1 - popcount / N as a float per id (PENUMBRA_SBS_VISIBILITY_NO_SAMPLE /
@@ -43,7 +47,7 @@
 //             + statistics, (2) a predicate pass: one point per list block inside an occlusion
 //             query, surviving when the longest list needs that block, (3) the light pass: for
 //             each block b < max_list_blocks under glBeginConditionalRender(query b), every caster
-//             drawn into a W x H framebuffer with no attachments; the geometry stage emits the
+//             drawn (closed, then open) into a W x H framebuffer with no attachments; the geometry stage culls (skips) and emits the
 //             influence region, each fragment walks its texel's list block (see
 //             light_pass.frag.glsl), (4) resolve. Nothing is read back, queried, allocated or
 //             thrown: misuse returns a Status.
@@ -108,6 +112,9 @@ struct SampleBasedSoftFrame {
     // Work counters (count_work; overflow always).
     uint64_t fragments = 0, pairs = 0, pairs_ignored = 0, pairs_unproven = 0, uncertain_bits = 0, exact_tests = 0,
              planes_unproven = 0, overflow = 0;
+    /// What the skips removed (SoftSkips; count_work): fragments of empty list blocks that returned
+    /// at once, closed casters' triangles culled (per frame, not per block), pairs cut by T's plane.
+    uint64_t fragments_skipped = 0, triangles_culled = 0, pairs_cut = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -115,7 +122,9 @@ struct SampleBasedSoftFrame {
 
 class SampleBasedSoftShadows {
 public:
-    using DrawCasters = std::function<void()>;
+    /// Draws every caster of one class (CasterClass::Closed: watertight, outward-oriented meshes,
+    /// culled per SoftSkips::closed_casters; Open: the rest), as the hard pipeline's callback.
+    using DrawCasters = std::function<void(CasterClass)>;
 
     SampleBasedSoftShadows(const SampleBasedSoftGpuOptions& options, const LightSampleSets& sets, const LightLutSetup* lut,
                            const InfluenceRegionSetup& influence, const glm::mat4& view_projection,
@@ -139,6 +148,11 @@ public:
         const GLint needed = options_.count_work ? 9 : 8;
         PENUMBRA_CHECK(fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
                        fragment_blocks, ", the light pass needs ", needed);
+        if (options_.count_work) {
+            const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
+            PENUMBRA_CHECK(geometry_blocks >= 1, "penumbra::SampleBasedSoftShadows: GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS = ",
+                           geometry_blocks, ": count_work needs 1 (the culled-triangle counter); set count_work = false");
+        }
         ShaderDefines defines = influence.defines;
         defines.push_back({"PENUMBRA_SBS_COUNT_WORK", options_.count_work ? "1" : "0"});
         const SbsBindings& b = bindings_;
@@ -162,7 +176,7 @@ public:
         ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
         ssbo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
         param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(SbsParams), ubo_alignment_) * ubo_alignment_);
-        params_staging_.assign(size_t(param_stride_) * (1 + options_.max_list_blocks), 0u);
+        params_staging_.assign(size_t(param_stride_) * (1 + 2 * options_.max_list_blocks), 0u);
         params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
         influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
         const std::vector<glm::dvec4> world = sampleBasedSoftSampleTable(sets_, options_.rotations);
@@ -263,6 +277,9 @@ public:
         f.exact_tests = w[PENUMBRA_SBS_WORK_EXACT_TESTS];
         f.planes_unproven = w[PENUMBRA_SBS_WORK_PLANES_UNPROVEN];
         f.overflow = w[PENUMBRA_SBS_WORK_OVERFLOW];
+        f.fragments_skipped = w[PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED];
+        f.triangles_culled = w[PENUMBRA_SBS_WORK_TRIANGLES_CULLED];
+        f.pairs_cut = w[PENUMBRA_SBS_WORK_PAIRS_CUT];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
@@ -357,10 +374,13 @@ private:
     void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
-        for (uint32_t b = 0; b <= options_.max_list_blocks; ++b) {
+        // Slot 0: the predicate pass and the resolve; 1 + 2 b + c: list block b, class c (0 closed).
+        for (uint32_t slot = 0; slot <= 2 * options_.max_list_blocks; ++slot) {
+            const uint32_t block = slot == 0 ? 0u : (slot - 1) / 2;
+            const bool closed = slot != 0 && (slot - 1) % 2 == 0;
             // Validated at construction: cannot throw.
-            const SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, b == 0 ? 0u : b - 1, has_sets);
-            std::memcpy(params_staging_.data() + size_t(b) * param_stride_, &p, sizeof p);
+            const SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, closed);
+            std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
         glNamedBufferSubData(params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
         const uint32_t zero = 0;
@@ -409,9 +429,11 @@ private:
         }
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-            bindParams(1 + b);
-            light_pass_.use();
-            draw_casters();
+            for (uint32_t c = 0; c < 2; ++c) {
+                bindParams(1 + 2 * b + c);
+                light_pass_.use();
+                draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+            }
             glEndConditionalRender();
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);

@@ -111,6 +111,12 @@ public:
         glBindVertexArray(vao_);
         if (index_count_) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(index_count_), GL_UNSIGNED_INT, nullptr);
     }
+    /// Draws the closed meshes (closed = true) or the others: a pipeline's caster callback
+    /// (CasterClass::Closed / Open).
+    void drawClass(bool closed) const {
+        for (const Range& r : ranges_)
+            if (r.closed == closed) draw(r);
+    }
     void draw(const Range& range) const {
         glBindVertexArray(vao_);
         if (range.index_count) {
