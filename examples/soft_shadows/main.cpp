@@ -15,6 +15,8 @@
 //       --reference compares every bit with the oracle on the same float view samples and the
 //       same light samples (JSON reference.mismatched_bits, total_bits, ties, visibility_rmse) and
 //       writes <out>_reference.png (the oracle's image) and <out>_error.png (|error| heat map).
+//       --frames F runs the pipeline F times, every pixel with a fresh selection word each frame,
+//       and writes the running average (JSON temporal.*: RMSE against an oracle image per frame).
 //   hard: the GPU alias-free hard-shadow pipeline (penumbra/pipelines/alias_free_hard.hpp,
 //       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
 //       --reference adds the oracle's verdict for the same samples and light point to the JSON
@@ -93,14 +95,29 @@ struct Args {
     glm::dvec3 origin{0.0};              // the whole scene translated by this (double) offset
     std::string shading = "bent";        // direct light: bent (sintorn2008 §4.3) | phong
     bool compare_shading = false;        // also write <out stem>_shading.png: Phong | bent
-    uint32_t frames = 1;                 // reference mode: temporal accumulation over F frames
+    uint32_t frames = 1;                 // reference and soft modes: temporal accumulation over F frames
     uint32_t frames_reference = 4096;    // ... against an oracle image with this many samples
     std::string lut = "exact";           // soft mode: exact | lut | brute (penumbra::SoftMode)
     uint32_t lut_res = 64;               // soft mode: LUT resolution R (R x R x R texels per table)
     uint32_t sets = 4;                   // soft mode: K light-sample sets, chosen per pixel
     uint32_t rotations = 8;              // soft mode: R rotation steps about the light's axis, per pixel
     uint32_t grid = 256;                 // soft mode: light grid G x G (lists and influence regions)
+    std::string skips = "all";           // hard and soft modes: the work skips on (all | none | a,b,...)
+    std::vector<std::string> skip_list;  // ... as names (kSoftSkips / kHardSkips)
+    bool check_skips = false;            // also run with every skip off and compare bit for bit
+    bool skip(const char* name) const { return std::find(skip_list.begin(), skip_list.end(), name) != skip_list.end(); }
 };
+
+// The skips each mode can switch (--skips), in their report order. Each leaves every shadow bit
+// as it is; --check-skips proves it on the frame at hand.
+//   soft: empty = light-pass fragments of empty list blocks return at once (SoftSkips::empty_blocks);
+//         cull  = closed casters' triangles that face away from the whole light are culled
+//                 (SoftSkips::closed_casters); cut = the supporting-plane cut, per pair
+//                 (SoftSkips::plane_cut) and of the influence regions (cut_by_supporting_plane);
+//         fit   = the light grid fitted to the view samples (sintorn2008 §4.3) instead of the scene.
+//   hard: cull  = light_facing_only; fit = fit_frustum; shadowed = skip_shadowed; box = clip_to_box.
+const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit"};
+const std::vector<std::string> kHardSkips = {"cull", "fit", "shadowed", "box"};
 
 /// The flags' text as given, before checkArgs turns them into Args values.
 struct RawArgs {
@@ -137,13 +154,15 @@ const ModeFlag kModeFlags[] = {
     {"--light-radius", true, false, true, "hard shadows use one light point, the light's centre"},
     {"--reference", false, true, true, "reference mode is the oracle already"},
     {"--view-samples", false, true, true, "reference mode traces exact primary rays on the CPU"},
-    {"--frames", true, false, false, "temporal accumulation runs on the oracle's soft shadows"},
-    {"--frames-reference", true, false, false, "temporal accumulation runs on the oracle's soft shadows"},
+    {"--frames", true, false, true, "hard shadows use one light point: there is nothing to accumulate"},
+    {"--frames-reference", true, false, true, "hard shadows use one light point: there is nothing to accumulate"},
     {"--lut", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
     {"--lut-res", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
     {"--sets", false, false, true, "only the GPU soft-shadow pipeline chooses light-sample sets per pixel"},
     {"--rotations", false, false, true, "only the GPU soft-shadow pipeline rotates light samples per pixel"},
     {"--grid", false, false, true, "only the GPU soft-shadow pipeline has a separate light grid"},
+    {"--skips", false, true, true, "the oracle does every test"},
+    {"--check-skips", false, true, true, "the oracle does every test"},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -189,8 +208,11 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_flag("--compare-shading", a.compare_shading,
                  "also write <out>_shading.png beside --out: the same frame with Phong (left) and bent (right)");
     app.add_option("--frames", raw.frames,
-                   "reference mode: accumulate F frames, each with fresh light-sample sets (8 sets chosen per "
-                   "pixel, sintorn2008 §4.2 temporal jitter); reports the RMSE after every frame")
+                   "reference and soft modes: accumulate F frames (sintorn2008 §4.2 temporal jitter) and report the "
+                   "visibility RMSE after every frame against an oracle image (--frames-reference). Reference mode: "
+                   "fresh light-sample sets every frame (8 chosen per pixel). Soft mode: the GPU pipeline once per "
+                   "frame, every pixel with a fresh set and rotation step (sampleBasedSoftSelection(x, y, frame)); "
+                   "writes the running average; with --reference the bit check is on the last frame")
         ->type_name("F")
         ->capture_default_str();
     app.add_option("--frames-reference", raw.frames_reference, "--frames: light samples of the oracle image the RMSE is against")
@@ -216,6 +238,17 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_option("--grid", raw.grid, "soft mode: light grid G x G of the sample lists and influence regions, 16..4096")
         ->type_name("G")
         ->capture_default_str();
+    app.add_option("--skips", a.skips,
+                   "hard and soft modes: the work skips on: all, none, or a comma list; soft: empty (empty list blocks "
+                   "return at once), cull (closed casters' triangles facing away from the whole light), cut "
+                   "(supporting-plane cut per pair and of the influence regions), fit (light grid fitted to the view "
+                   "samples); hard: cull, fit, shadowed (no retest of shadowed samples), box (clip to the triangle's "
+                   "box). None changes a shadow bit")
+        ->type_name("all|none|LIST")
+        ->capture_default_str();
+    app.add_flag("--check-skips", a.check_skips,
+                 "hard and soft modes: also run the frame with every skip off and compare the shadow bits word for "
+                 "word (JSON: skips_check.*)");
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
 }
@@ -297,6 +330,26 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
         a.has_light_pos = true;
     }
     if (!raw.origin.empty()) a.origin = parseVec3(raw.origin, "--origin");
+    {
+        const std::vector<std::string>& names = hard ? kHardSkips : kSoftSkips;
+        a.skip_list.clear();
+        if (a.skips == "all") {
+            a.skip_list = names;
+        } else if (a.skips != "none") {
+            std::istringstream in(a.skips);
+            std::string name;
+            while (std::getline(in, name, ',')) {
+                if (std::find(names.begin(), names.end(), name) == names.end()) {
+                    std::string valid;
+                    for (const std::string& n : names) valid += (valid.empty() ? "" : ", ") + n;
+                    usageError("--skips: '", name, "' is not a skip of --mode ", a.mode, " (all, none, or a comma list of: ",
+                               valid, ")");
+                }
+                if (!a.skip(name.c_str())) a.skip_list.push_back(name);
+            }
+            if (a.skip_list.empty()) usageError("--skips: '", a.skips, "' names no skip (all, none, or a comma list)");
+        }
+    }
     a.frames = parseCount(raw.frames, "--frames", 1, 1024);
     a.frames_reference = parseCount(raw.frames_reference, "--frames-reference", 1, 1u << 16);
     if (a.frames > 1 && (a.samples < 32 || a.samples > 1024 || a.samples % 32 != 0))
@@ -396,6 +449,12 @@ MemoryEstimate estimateMemory(const Args& args, size_t triangles) {
         m.parts.emplace_back("view samples", (8.0 + 24.0 + 4.0 + 24.0 + 24.0) * pixels);
         m.parts.emplace_back("oracle masks (blocked + ties)", 2.0 * 4.0 * words * pixels);
         m.parts.emplace_back("light samples", 24.0 * double(args.samples));
+    }
+    if (args.frames > 1 && args.mode != "hard") {
+        // --frames: the oracle image (blocked + ties masks of --frames-reference samples, the
+        // receivers in double) and the running sums.
+        const double reference_words = std::ceil(double(args.frames_reference) / 32.0);
+        m.parts.emplace_back("temporal reference image", (2.0 * 4.0 * reference_words + 24.0 + 8.0 + 12.0) * pixels);
     }
     m.parts.emplace_back("image and PNG", 6.0 * pixels);
     return m;
@@ -722,18 +781,23 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
     light.view_projection = penumbra::lightViewProjectionForBounds(light.light, v.lo, v.hi);
-    penumbra::AliasFreeHardOptions options;
-    options.grid_width = w;
-    options.grid_height = h;
-    options.count_work = true;
-    if (depth_input) options.coplanar_epsilon = kDepthCoplanarEpsilon;
+    // --skips: the options with the chosen skips on (all_off: every skip off, for --check-skips).
+    auto makeOptions = [&](bool all_off) {
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = w;
+        o.grid_height = h;
+        o.count_work = true;
+        if (depth_input) o.coplanar_epsilon = kDepthCoplanarEpsilon;
+        o.light_facing_only = !all_off && args.skip("cull");
+        o.fit_frustum = !all_off && args.skip("fit");
+        o.skip_shadowed = !all_off && args.skip("shadowed");
+        o.clip_to_box = !all_off && args.skip("box");
+        return o;
+    };
+    const penumbra::AliasFreeHardOptions options = makeOptions(false);
     penumbra::AliasFreeHardShadows pipeline(options);
     pipeline.reserve(w * h);
-    auto draw = [&](penumbra::CasterClass cls) {
-        for (const auto& r : gpu.ranges()) {
-            if (r.closed == (cls == penumbra::CasterClass::Closed)) gpu.draw(r);
-        }
-    };
+    auto draw = [&](penumbra::CasterClass cls) { gpu.drawClass(cls == penumbra::CasterClass::Closed); };
     const penumbra::scene::GBuffer& gbuffer = v.gbuffer;
     const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()},
                                                    {gbuffer.faceBuffer().id(), 0, gbuffer.faceBuffer().size()}};
@@ -748,6 +812,32 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     auto t0 = std::chrono::steady_clock::now();
     const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
     const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, size_t(w) * h);
+
+    // --check-skips: the same frame with every skip off, state by state.
+    Json skips_check;
+    if (args.check_skips) {
+        penumbra::AliasFreeHardShadows off(makeOptions(true));
+        off.reserve(w * h);
+        auto run_off = [&] {
+            return depth_input ? off.run(depth_samples, light, draw) : off.run(buffer_input, w * h, light, draw);
+        };
+        const double off_ms = timedFrame(run_off, "hard-shadow (skips off)");
+        if (off_ms < 0) return 1;
+        const penumbra::AliasFreeHardFrame off_frame = off.readFrame();
+        const std::vector<uint32_t> off_states = off.stateBuffer().download<uint32_t>(0, size_t(w) * h);
+        uint64_t mismatched = 0;
+        for (size_t i = 0; i < states.size(); ++i) mismatched += states[i] != off_states[i];
+        skips_check = {{"compared_words", states.size()},
+                       {"mismatched_words", mismatched},
+                       {"identical", mismatched == 0},
+                       {"shadows_ms_on", shadows_ms},
+                       {"shadows_ms_off", off_ms},
+                       {"off", {{"fragments", off_frame.fragments},
+                                {"tests", off_frame.tests},
+                                {"triangles_emitted", off_frame.triangles_emitted}}}};
+        std::fprintf(stderr, "soft_shadows: --check-skips: %llu of %zu states differ with every skip off (%.1f ms on, %.1f ms off)\n",
+                     static_cast<unsigned long long>(mismatched), states.size(), shadows_ms, off_ms);
+    }
 
     // --reference: the oracle's verdict on the same float samples and light point; for depth input
     // also at the true surface points (the cost of depth reconstruction).
@@ -798,6 +888,8 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"overflow", frame.overflow},
                      {"view_samples", args.view_samples},
                      {"coplanar_epsilon", options.coplanar_epsilon}};
+        j["skips"] = args.skip_list;
+        if (args.check_skips) j["skips_check"] = skips_check;
         if (args.reference) {
             j["reference"] = {{"samples", same.samples}, {"mismatched", same.mismatched}, {"ties", same.ties}};
             if (depth_input) {
@@ -897,35 +989,60 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     fit_options.depth_range = penumbra::LightDepthRange::Unclipped;
     const penumbra::LightFrustumFit fit = penumbra::fitLightFrustumCpu(
         penumbra::sampleListsSetup(args.grid, args.grid, w * h), fit_light, v.positions.data(), nullptr, fit_options);
-    const glm::mat4 vp = fit.valid ? fit.view_projection : fit_light.view_projection;
-    double far_depth = 0.0;
     glm::dvec3 box_lo(std::numeric_limits<double>::infinity()), box_hi(-std::numeric_limits<double>::infinity());
     for (const glm::vec4& p : v.positions) {
         if (p.w == 0.0f) continue;
-        far_depth = std::max(far_depth, double((vp * glm::vec4(glm::vec3(p), 1.0f)).w));
         box_lo = glm::min(box_lo, glm::dvec3(p));
         box_hi = glm::max(box_hi, glm::dvec3(p));
     }
     const auto [scene_lo, scene_hi] = sceneBounds(scene);
     box_lo = glm::min(box_lo, scene_lo);
     box_hi = glm::max(box_hi, scene_hi);
-    if (!(far_depth > 0.0)) {
+    // The grid for a set of skips: fitted (skip "fit") or the frustum around the view samples' box
+    // it starts from (what a renderer without the §4.3 fit would use); regions cut by their
+    // caster's plane with skip "cut".
+    struct LightGrid {
+        glm::mat4 vp{1.0f};
+        penumbra::InfluenceRegionSetup influence;
+    };
+    auto lightGrid = [&](bool fit_on, bool cut_on) {
+        LightGrid g;
+        g.vp = fit_on && fit.valid ? fit.view_projection : fit_light.view_projection;
+        double far_depth = 0.0;
+        for (const glm::vec4& p : v.positions)
+            if (p.w != 0.0f) far_depth = std::max(far_depth, double((g.vp * glm::vec4(glm::vec3(p), 1.0f)).w));
+        if (!(far_depth > 0.0)) return g;
+        penumbra::InfluenceRegionOptions influence_options;
+        influence_options.grid_width = influence_options.grid_height = int(args.grid);
+        influence_options.far_plane = penumbra::influenceFarPlaneAtDepth(g.vp, far_depth * 1.01 + 1e-3);
+        influence_options.cut_by_supporting_plane = cut_on;
+        g.influence = penumbra::influenceRegionSetup(light, g.vp, influence_options);
+        return g;
+    };
+    const LightGrid grid = lightGrid(args.skip("fit"), args.skip("cut"));
+    if (grid.influence.width() == 0) {
         std::fprintf(stderr, "soft_shadows: no view sample in front of the light\n");
         return 1;
     }
-    penumbra::InfluenceRegionOptions influence_options;
-    influence_options.grid_width = influence_options.grid_height = int(args.grid);
-    influence_options.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
-    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, influence_options);
+    const glm::mat4& vp = grid.vp;
+    const penumbra::InfluenceRegionSetup& influence = grid.influence;
 
-    penumbra::SampleBasedSoftGpuOptions options;
-    options.mode = mode;
-    options.grid_width = options.grid_height = args.grid;
-    options.rotations = rotations;
-    options.timings = true;
-    // The coplanar rule of the hard pipeline: above float rounding of surface points (1e-7) or of
-    // positions rebuilt from a 32-bit depth buffer (kDepthCoplanarEpsilon).
-    options.oracle.coplanar_epsilon = v.depth_input ? kDepthCoplanarEpsilon : 1e-7;
+    // --skips: the options with the chosen skips on (all_off: every skip off, for --check-skips).
+    auto makeOptions = [&](bool all_off) {
+        penumbra::SampleBasedSoftGpuOptions o;
+        o.mode = mode;
+        o.grid_width = o.grid_height = args.grid;
+        o.rotations = rotations;
+        o.timings = true;
+        // The coplanar rule of the hard pipeline: above float rounding of surface points (1e-7) or
+        // of positions rebuilt from a 32-bit depth buffer (kDepthCoplanarEpsilon).
+        o.oracle.coplanar_epsilon = v.depth_input ? kDepthCoplanarEpsilon : 1e-7;
+        o.skips.empty_blocks = !all_off && args.skip("empty");
+        o.skips.closed_casters = !all_off && args.skip("cull");
+        o.skips.plane_cut = !all_off && args.skip("cut");
+        return o;
+    };
+    const penumbra::SampleBasedSoftGpuOptions options = makeOptions(false);
 
     // The LUT (sintorn2008 §4.2), generated on the GPU; certified for Exact, with the tolerance
     // that lets Exact prove pairs at this coplanar epsilon (sampleBasedSoftLutTolerance).
@@ -955,12 +1072,13 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     // The pipeline: load time (compile, reserve, validate), then one warm-up and one timed frame.
     penumbra::SampleBasedSoftShadows pipeline(options, sets, lut.get(), influence, vp);
     pipeline.reserve(w * h);
-    const penumbra::gl::Buffer sets_buffer = penumbra::gl::Buffer::fromVector(pixel_sets);
+    // Allocated once: --frames uploads each frame's selection words into it.
+    penumbra::gl::Buffer sets_buffer = penumbra::gl::Buffer::fromVector(pixel_sets);
     const penumbra::SbsFrameBuffers frame_buffers{{sets_buffer.id(), 0, sets_buffer.size()}, {}, {}};
     const penumbra::scene::GBuffer& gbuffer = v.gbuffer;
     const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
     const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), 0, v.view};
-    const auto draw = [&] { gpu.draw(); };
+    const auto draw = [&](penumbra::CasterClass c) { gpu.drawClass(c == penumbra::CasterClass::Closed); };
     auto run = [&] {
         return v.depth_input ? pipeline.run(depth_samples, lut_table, draw, frame_buffers)
                              : pipeline.run(buffer_input, w * h, lut_table, draw, frame_buffers);
@@ -972,8 +1090,49 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     const double shadows_ms = timedFrame(run, "soft-shadow");
     if (shadows_ms < 0) return 1;
     const penumbra::SampleBasedSoftFrame frame = pipeline.readFrame();
-    const std::vector<float> gpu_visibility = pipeline.readVisibility();
+    std::vector<float> gpu_visibility = pipeline.readVisibility();  // frame 0's; --frames: the last frame's
     const uint32_t words = pipeline.wordsPerSample();
+
+    // --check-skips: the same frame (frame 0's selection words) with every skip off: unfitted grid,
+    // uncut regions, no culling, no cut, every fragment set up; masks word for word.
+    Json skips_check;
+    if (args.check_skips) {
+        const std::vector<uint32_t> masks_on = pipeline.readMasks();
+        const LightGrid off_grid = lightGrid(false, false);
+        penumbra::SampleBasedSoftShadows off(makeOptions(true), sets, lut.get(), off_grid.influence, off_grid.vp);
+        off.reserve(w * h);
+        auto run_off = [&] {
+            return v.depth_input ? off.run(depth_samples, lut_table, draw, frame_buffers)
+                                 : off.run(buffer_input, w * h, lut_table, draw, frame_buffers);
+        };
+        const double off_ms = timedFrame(run_off, "soft-shadow (skips off)");
+        if (off_ms < 0) return 1;
+        const penumbra::SampleBasedSoftFrame off_frame = off.readFrame();
+        const std::vector<uint32_t> masks_off = off.readMasks();
+        uint64_t mismatched = 0, mismatched_samples = 0;
+        for (size_t i = 0; i < size_t(w) * h; ++i) {
+            uint64_t wrong = 0;
+            for (uint32_t k2 = 0; k2 < words; ++k2) wrong += masks_on[i * words + k2] != masks_off[i * words + k2];
+            mismatched += wrong;
+            mismatched_samples += wrong != 0;
+        }
+        auto work = [](const penumbra::SampleBasedSoftFrame& f) {
+            return Json{{"fragments", f.fragments},         {"fragments_skipped", f.fragments_skipped},
+                        {"pairs", f.pairs},                 {"pairs_cut", f.pairs_cut},
+                        {"triangles_culled", f.triangles_culled}, {"exact_tests", f.exact_tests},
+                        {"max_list_length", f.statistics.max_list_length}};
+        };
+        skips_check = {{"compared_words", masks_on.size()},
+                       {"mismatched_words", mismatched},
+                       {"mismatched_view_samples", mismatched_samples},
+                       {"identical", mismatched == 0},
+                       {"shadows_ms_on", shadows_ms},
+                       {"shadows_ms_off", off_ms},
+                       {"on", work(frame)},
+                       {"off", work(off_frame)}};
+        std::fprintf(stderr, "soft_shadows: --check-skips: %llu of %zu mask words differ with every skip off (%.1f ms on, %.1f ms off)\n",
+                     static_cast<unsigned long long>(mismatched), masks_on.size(), shadows_ms, off_ms);
+    }
     // GL_TIME_ELAPSED per stage: trusted where the stages add up to a plausible share of the wall
     // time (llvmpipe answers with values that are not a measurement).
     const double stage_ms[3] = {frame.lists_ns * 1e-6, frame.light_pass_ns * 1e-6, frame.resolve_ns * 1e-6};
@@ -995,8 +1154,102 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         visible_sum += visible[i];
     }
 
+    // --frames F > 1: temporal accumulation (sintorn2008 §4.2, Fig. 7). Frame f gives every pixel a
+    // fresh selection word (set and rotation step: sampleBasedSoftSelection(x, y, f, K, R)), uploaded
+    // into the sets buffer allocated at load time, then one run; each surface pixel keeps the running
+    // average of its tested visibilities. After every frame: the RMSE of that average against an
+    // oracle image of --frames-reference samples on the same float view samples. Frame 0 is the
+    // timed frame above, so after it the average is the single-frame image.
+    Json temporal_json;
+    std::vector<float> frame_visible;  // the last frame's own visibility (what --reference checks)
+    if (args.frames > 1) {
+        t0 = std::chrono::steady_clock::now();
+        penumbra::reference::VisibilityOptions vo;
+        vo.coplanar_epsilon = options.oracle.coplanar_epsilon;
+        std::vector<size_t> members;
+        std::vector<glm::dvec3> points;
+        for (size_t i = 0; i < visible.size(); ++i) {
+            if (!v.surface(i) || v.positions[i].w == 0.0f) continue;
+            members.push_back(i);
+            points.emplace_back(v.positions[i]);
+        }
+        const std::vector<glm::dvec3> reference_samples =
+            penumbra::reference::sphereLightSamples(light_pos, light_radius, args.frames_reference, 7);
+        std::vector<double> truth(members.size());
+        {
+            const penumbra::reference::VisibilityResult image =
+                evaluateWithProgress(oracle, points, reference_samples, vo, "reference image");
+            for (size_t m = 0; m < members.size(); ++m) truth[m] = image.visibleFraction(m);
+        }
+        const double reference_image_ms = msSince(t0);
+
+        std::vector<double> sum(visible.size(), 0.0);
+        std::vector<uint32_t> count(visible.size(), 0u);
+        Json rmse = Json::array(), rmse_scaled = Json::array(), frame_ms = Json::array();
+        for (uint32_t f = 0; f < args.frames; ++f) {
+            if (f > 0) {
+                for (uint32_t y = 0; y < h; ++y)
+                    for (uint32_t x = 0; x < w; ++x)
+                        pixel_sets[size_t(y) * w + x] = penumbra::sampleBasedSoftSelection(x, y, f, k, rotations);
+                sets_buffer.upload(0, pixel_sets.data(), pixel_sets.size() * sizeof(uint32_t));
+                const auto t_frame = std::chrono::steady_clock::now();
+                const penumbra::Status status = run();
+                glFinish();
+                const double ms = msSince(t_frame);
+                if (status != penumbra::Status::Ok) {
+                    std::fprintf(stderr, "soft_shadows: the soft-shadow pipeline returned '%s' in frame %u\n",
+                                 penumbra::statusName(status), f + 1);
+                    return 1;
+                }
+                frame_ms.push_back(ms);
+                gpu_visibility = pipeline.readVisibility();
+            } else {
+                frame_ms.push_back(shadows_ms);
+            }
+            for (size_t i = 0; i < visible.size(); ++i) {
+                if (!v.surface(i) || gpu_visibility[i] < 0.0f) continue;
+                sum[i] += gpu_visibility[i];
+                ++count[i];
+            }
+            double squares = 0;
+            size_t compared = 0;
+            for (size_t m = 0; m < members.size(); ++m) {
+                const size_t i = members[m];
+                if (count[i] == 0) continue;
+                const double e = sum[i] / count[i] - truth[m];
+                squares += e * e;
+                ++compared;
+            }
+            const double value = compared ? std::sqrt(squares / double(compared)) : 0.0;
+            rmse.push_back(value);
+            rmse_scaled.push_back(value * std::sqrt(double(f + 1)));
+            std::fprintf(stderr, "soft_shadows: frame %u/%u: visibility RMSE %.5f vs %u-sample oracle (x sqrt(frames) = %.4f)\n",
+                         f + 1, args.frames, value, args.frames_reference, value * std::sqrt(double(f + 1)));
+        }
+        frame_visible.assign(visible.size(), 1.0f);
+        visible_sum = 0;
+        for (size_t i = 0; i < visible.size(); ++i) {
+            if (v.surface(i) && gpu_visibility[i] >= 0.0f) frame_visible[i] = gpu_visibility[i];
+            if (count[i] == 0) continue;
+            visible[i] = float(sum[i] / count[i]);
+            visible_sum += visible[i];
+        }
+        temporal_json = {{"frames", args.frames},
+                         {"sets", k},
+                         {"rotations", rotations},
+                         {"samples_per_frame", n},
+                         {"reference_samples", args.frames_reference},
+                         {"rmse", rmse},
+                         {"rmse_times_sqrt_frames", rmse_scaled},
+                         {"frame_ms", frame_ms},
+                         {"reference_ms", reference_image_ms}};
+    }
+    // --reference checks one frame's masks: the only one, or with --frames the last.
+    const std::vector<float>& checked_visible = args.frames > 1 ? frame_visible : visible;
+
     // --reference: the oracle on the same float view samples, each with the same light-sample set
-    // (grouped by set), bit by bit; ties apart.
+    // (grouped by set), bit by bit; ties apart. With --frames: the last frame's masks, selection
+    // words (pixel_sets) and visibility.
     Json reference_json;
     std::vector<float> oracle_visible;
     double reference_ms = 0;
@@ -1006,7 +1259,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         penumbra::reference::VisibilityOptions vo;
         vo.coplanar_epsilon = options.oracle.coplanar_epsilon;
         vo.tie_epsilon = options.oracle.tie_epsilon;
-        oracle_visible = visible;
+        oracle_visible = checked_visible;
         uint64_t total_bits = 0, ties = 0, mismatched = 0, mismatched_samples = 0, compared = 0;
         double squares = 0;
         for (uint32_t g = 0; g < k * rotations; ++g) {
@@ -1037,7 +1290,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                 mismatched += wrong;
                 mismatched_samples += wrong > 0;
                 oracle_visible[i] = float(truth.visibleFraction(m));
-                const double e = double(visible[i]) - truth.visibleFraction(m);
+                const double e = double(checked_visible[i]) - truth.visibleFraction(m);
                 squares += e * e;
                 ++compared;
             }
@@ -1047,7 +1300,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         penumbra::scene::ImageRgb8 reference_images[2];
         shadeGpuImages(v, merged, light_pos, oracle_visible, reference_images);
         penumbra::scene::writePng(siblingPath(args.out, "_reference"), reference_images[args.shading == "bent" ? 1 : 0]);
-        writeErrorPng(siblingPath(args.out, "_error"), v, visible, oracle_visible, error_scale);
+        writeErrorPng(siblingPath(args.out, "_error"), v, checked_visible, oracle_visible, error_scale);
         reference_json = {{"mismatched_bits", mismatched},
                           {"total_bits", total_bits},
                           {"ties", ties},
@@ -1098,8 +1351,14 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"uncertain_bits", frame.uncertain_bits},
                      {"uncertain_fraction", pair_bits ? double(frame.uncertain_bits) / double(pair_bits) : 0.0},
                      {"exact_tests", frame.exact_tests},
-                     {"overflow", frame.overflow}};
+                     {"overflow", frame.overflow},
+                     {"fragments_skipped", frame.fragments_skipped},
+                     {"triangles_culled", frame.triangles_culled},
+                     {"pairs_cut", frame.pairs_cut}};
+        j["skips"] = args.skip_list;
+        if (args.check_skips) j["skips_check"] = skips_check;
         if (args.reference) j["reference"] = reference_json;
+        if (args.frames > 1) j["temporal"] = temporal_json;
         j["timings_ms"] = {{"load", load_ms},
                            {"gbuffer", v.ms},
                            {"light_samples_and_lut", lut_ms},
@@ -1128,6 +1387,11 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                         reference_json["mismatched_bits"].dump().c_str(), reference_json["total_bits"].dump().c_str(),
                         reference_json["ties"].dump().c_str(), reference_json["visibility_rmse"].get<double>(),
                         siblingPath(args.out, "_reference").c_str(), siblingPath(args.out, "_error").c_str());
+        }
+        if (args.frames > 1) {
+            std::printf("temporal: %u frames, visibility RMSE %.5f -> %.5f vs %u-sample oracle\n", args.frames,
+                        temporal_json["rmse"].front().get<double>(), temporal_json["rmse"].back().get<double>(),
+                        args.frames_reference);
         }
     }
     return 0;

@@ -1,0 +1,37 @@
+# Runs soft_shadows --mode soft --frames FRAMES --json (ARGS: extra flags, '|'-separated): temporal
+# accumulation on the GPU pipeline. The JSON's temporal.rmse must hold FRAMES finite values (the
+# running average against the oracle image, after every frame) and the last must be below the
+# first; the written image must be a PNG. Invoked by ctest (examples/CMakeLists.txt).
+string(REPLACE "|" ";" extra "${ARGS}")
+execute_process(COMMAND "${EXE}" --mode soft --json --frames ${FRAMES} --out "${OUT}" ${extra}
+                RESULT_VARIABLE result OUTPUT_VARIABLE json ERROR_VARIABLE err)
+if(NOT result EQUAL 0)
+    message(FATAL_ERROR "soft_shadows failed (${result}): ${err}")
+endif()
+string(JSON frames GET "${json}" temporal frames)
+string(JSON count LENGTH "${json}" temporal rmse)
+string(JSON times LENGTH "${json}" temporal frame_ms)
+string(JSON untested GET "${json}" soft untested)
+if(NOT frames EQUAL FRAMES OR NOT count EQUAL FRAMES OR NOT times EQUAL FRAMES OR NOT untested EQUAL 0)
+    message(FATAL_ERROR "expected ${FRAMES} frames, ${FRAMES} RMSE values and frame times, every sample tested: ${json}")
+endif()
+set(values "")
+math(EXPR last "${count} - 1")
+foreach(f RANGE ${last})
+    string(JSON value GET "${json}" temporal rmse ${f})
+    # nlohmann writes NaN and infinities as null: a finite value is a plain number.
+    if(NOT value MATCHES "^[0-9]+(\\.[0-9]+)?([eE][-+]?[0-9]+)?$")
+        message(FATAL_ERROR "RMSE of frame ${f} is not a finite number ('${value}'): ${json}")
+    endif()
+    list(APPEND values "${value}")
+endforeach()
+list(GET values 0 first_value)
+list(GET values ${last} last_value)
+if(NOT last_value LESS first_value)
+    message(FATAL_ERROR "the running average did not converge: RMSE ${values}")
+endif()
+file(READ "${OUT}" signature LIMIT 8 HEX)
+if(NOT signature STREQUAL "89504e470d0a1a0a")
+    message(FATAL_ERROR "${OUT} is not a PNG (${signature})")
+endif()
+message("ok: ${frames} frames, RMSE ${values}")
