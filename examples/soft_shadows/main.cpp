@@ -114,9 +114,11 @@ struct Args {
 //         cull  = closed casters' triangles that face away from the whole light are culled
 //                 (SoftSkips::closed_casters); cut = the supporting-plane cut, per pair
 //                 (SoftSkips::plane_cut) and of the influence regions (cut_by_supporting_plane);
-//         fit   = the light grid fitted to the view samples (sintorn2008 §4.3) instead of the scene.
+//         fit   = the light grid fitted to the view samples (sintorn2008 §4.3) instead of their box;
+//         silhouette = outside every potential silhouette edge's region one test from the light
+//                 centre per pair (SoftSkips::silhouettes, laine2005 §3.3).
 //   hard: cull  = light_facing_only; fit = fit_frustum; shadowed = skip_shadowed; box = clip_to_box.
-const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit"};
+const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit", "silhouette"};
 const std::vector<std::string> kHardSkips = {"cull", "fit", "shadowed", "box"};
 
 /// The flags' text as given, before checkArgs turns them into Args values.
@@ -242,7 +244,8 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
                    "hard and soft modes: the work skips on: all, none, or a comma list; soft: empty (empty list blocks "
                    "return at once), cull (closed casters' triangles facing away from the whole light), cut "
                    "(supporting-plane cut per pair and of the influence regions), fit (light grid fitted to the view "
-                   "samples); hard: cull, fit, shadowed (no retest of shadowed samples), box (clip to the triangle's "
+                   "samples), silhouette (outside every potential silhouette edge's region one test from the light centre); "
+                   "hard: cull, fit, shadowed (no retest of shadowed samples), box (clip to the triangle's "
                    "box). None changes a shadow bit")
         ->type_name("all|none|LIST")
         ->capture_default_str();
@@ -832,6 +835,12 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                        {"identical", mismatched == 0},
                        {"shadows_ms_on", shadows_ms},
                        {"shadows_ms_off", off_ms},
+                       {"on", {{"fragments", frame.fragments},
+                               {"tests", frame.tests},
+                               {"triangles_emitted", frame.triangles_emitted},
+                               {"tests_skipped", frame.tests_skipped},
+                               {"fragments_skipped", frame.fragments_skipped},
+                               {"triangles_culled", frame.triangles_culled}}},
                        {"off", {{"fragments", off_frame.fragments},
                                 {"tests", off_frame.tests},
                                 {"triangles_emitted", off_frame.triangles_emitted}}}};
@@ -886,6 +895,9 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"tests", frame.tests},
                      {"triangles_emitted", frame.triangles_emitted},
                      {"overflow", frame.overflow},
+                     {"tests_skipped", frame.tests_skipped},
+                     {"fragments_skipped", frame.fragments_skipped},
+                     {"triangles_culled", frame.triangles_culled},
                      {"view_samples", args.view_samples},
                      {"coplanar_epsilon", options.coplanar_epsilon}};
         j["skips"] = args.skip_list;
@@ -1040,6 +1052,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         o.skips.empty_blocks = !all_off && args.skip("empty");
         o.skips.closed_casters = !all_off && args.skip("cull");
         o.skips.plane_cut = !all_off && args.skip("cut");
+        o.skips.silhouettes = !all_off && args.skip("silhouette");
         return o;
     };
     const penumbra::SampleBasedSoftGpuOptions options = makeOptions(false);
@@ -1079,9 +1092,10 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     const penumbra::SampleBufferInput buffer_input{{gbuffer.positionBuffer().id(), 0, gbuffer.positionBuffer().size()}, {}};
     const penumbra::SampleDepthInput depth_samples{gbuffer.depthTexture(), 0, v.view};
     const auto draw = [&](penumbra::CasterClass c) { gpu.drawClass(c == penumbra::CasterClass::Closed); };
+    const auto draw_adjacency = [&] { gpu.drawAdjacency(); };
     auto run = [&] {
-        return v.depth_input ? pipeline.run(depth_samples, lut_table, draw, frame_buffers)
-                             : pipeline.run(buffer_input, w * h, lut_table, draw, frame_buffers);
+        return v.depth_input ? pipeline.run(depth_samples, lut_table, draw, frame_buffers, draw_adjacency)
+                             : pipeline.run(buffer_input, w * h, lut_table, draw, frame_buffers, draw_adjacency);
     };
     if (v.depth_input) pipeline.validate(depth_samples, lut_table, frame_buffers);
     else pipeline.validate(buffer_input, w * h, lut_table, frame_buffers);
@@ -1092,6 +1106,9 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     const penumbra::SampleBasedSoftFrame frame = pipeline.readFrame();
     std::vector<float> gpu_visibility = pipeline.readVisibility();  // frame 0's; --frames: the last frame's
     const uint32_t words = pipeline.wordsPerSample();
+    // SoftSkips::silhouettes: light texels inside some potential silhouette's region.
+    uint64_t penumbra_texels = 0;
+    for (uint32_t m : pipeline.readMarks()) penumbra_texels += m != 0;
 
     // --check-skips: the same frame (frame 0's selection words) with every skip off: unfitted grid,
     // uncut regions, no culling, no cut, every fragment set up; masks word for word.
@@ -1120,6 +1137,8 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
             return Json{{"fragments", f.fragments},         {"fragments_skipped", f.fragments_skipped},
                         {"pairs", f.pairs},                 {"pairs_cut", f.pairs_cut},
                         {"triangles_culled", f.triangles_culled}, {"exact_tests", f.exact_tests},
+                        {"pairs_hard", f.pairs_hard},         {"pairs_recovered", f.pairs_recovered},
+                        {"tests_skipped", f.pairs_cut + f.pairs_hard},
                         {"max_list_length", f.statistics.max_list_length}};
         };
         skips_check = {{"compared_words", masks_on.size()},
@@ -1354,7 +1373,11 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"overflow", frame.overflow},
                      {"fragments_skipped", frame.fragments_skipped},
                      {"triangles_culled", frame.triangles_culled},
-                     {"pairs_cut", frame.pairs_cut}};
+                     {"pairs_cut", frame.pairs_cut},
+                     {"pairs_hard", frame.pairs_hard},
+                     {"pairs_recovered", frame.pairs_recovered},
+                     {"tests_skipped", frame.pairs_cut + frame.pairs_hard},
+                     {"penumbra_texels", penumbra_texels}};
         j["skips"] = args.skip_list;
         if (args.check_skips) j["skips_check"] = skips_check;
         if (args.reference) j["reference"] = reference_json;

@@ -133,6 +133,9 @@ struct AliasFreeHardFrame {
     uint64_t overflow = 0;                  ///< samples left untested past the last block
     uint64_t fragments = 0, tests = 0, triangles_emitted = 0;  ///< when count_work
     uint64_t fallbacks = 0;  ///< when count_work, exact filtered mode: blocker tests decided in double
+    /// What the skips removed (count_work): samples skip_shadowed did not retest, fragments
+    /// clip_to_box discarded, closed casters' triangles culled (back_faces_only / light_facing_only).
+    uint64_t tests_skipped = 0, fragments_skipped = 0, triangles_culled = 0;
     /// Fixed-6 two-pass light pass (always counted, list block 0; every block draws the same
     /// casters): caster triangles the direct pass handed to the spill pass (those that need
     /// clipping, afhSpilledTriangles() on the CPU), and of them the ones lost because the spill

@@ -91,7 +91,8 @@ inline const char* softModeName(SoftMode mode) {
 /// Work the pipeline may skip (sintorn2008 §4.3, "skip what a scene doesn't need"). Each skip
 /// leaves every mask bit of Exact and Brute unchanged (the argument is with each flag; the tests
 /// compare masks with each skip on and off, bit for bit, on every built-in and shared scene); Lut
-/// is an approximation whose bits may move with the plane cut. Value-initialised = all on.
+/// is an approximation whose bits may move with the plane cut and the silhouette skip.
+/// Value-initialised = all on but silhouettes (which needs adjacency).
 struct SoftSkips {
     /// GPU only: a light-pass fragment whose list block is empty returns before the caster's
     /// per-fragment setup (about half the fragments of a typical frame). Counted:
@@ -105,9 +106,17 @@ struct SoftSkips {
     /// closed mesh must leave the mesh's solid before it reaches l (l lies outside every solid), and
     /// the face it leaves through has l strictly in front (winding number: entering faces raise it,
     /// leaving faces lower it, and it ends at 0); culled faces have every light sample behind, so
-    /// the face that blocks the segment is always kept. (The seed's opposite choice, light-facing
-    /// triangles culled, loses receivers whose segment enters the solid right at the receiver:
-    /// self-shadowed receivers, concave creases.) Counted: triangles_culled.
+    /// the face that blocks the segment is always kept — geometrically. The oracle's coplanar rule
+    /// (rule 2) ignores a triangle for receivers within coplanar_epsilon * scale of it, a reach that
+    /// differs from triangle to triangle: for a receiver just outside a convex edge it can ignore the
+    /// face the segment leaves through and count the culled one it enters through. So a receiver
+    /// within that reach (scale_hi, the largest over the light) of a kept closed triangle, and not
+    /// provably on its outer side (from there a segment to a light point the face faces never
+    /// crosses its plane, so it cannot leave through it), gets the culled triangles too (a second
+    /// pass over them that only such receivers take: counted pairs_recovered); every other
+    /// receiver has the leaving face counted. (The seed's opposite
+    /// choice, light-facing triangles culled, loses receivers whose segment enters the solid right
+    /// at the receiver: self-shadowed receivers, concave creases.) Counted: triangles_culled.
     bool closed_casters = true;
     /// A (receiver p, caster T) pair is skipped before its edge planes are built when p and the
     /// whole light lie strictly on the same side of T's plane, each farther from it than the
@@ -117,6 +126,19 @@ struct SoftSkips {
     /// influence region's own cut is InfluenceRegionOptions::cut_by_supporting_plane).
     /// Counted: pairs_cut.
     bool plane_cut = true;
+    /// GPU only, off by default (it needs the casters with adjacency: the run's DrawAdjacency
+    /// callback, penumbra::triangleAdjacency): penumbrae come only from edges that are silhouettes
+    /// from some point of the light (laine2005 §3.3). An edge is a potential silhouette unless the
+    /// whole light lies strictly in front of both its faces or strictly behind both (the faces
+    /// oriented as one sheet across the edge; open and non-manifold edges always are). A silhouette
+    /// pass rasterizes every potential silhouette's influence region into a texel mask; view samples
+    /// of unmarked texels take one exact test from the light centre per caster, which sets all N
+    /// bits or none. Why nothing changes: as a light point moves over the light, whether its segment
+    /// to p meets the casters changes only where the segment crosses a silhouette edge, and outside
+    /// every silhouette's region no segment from p to the light does; so every light sample has the
+    /// centre's verdict, and the casters that block the centre are exactly those needed. Counted:
+    /// pairs_hard.
+    bool silhouettes = false;
 };
 
 /// Value-initialised = defaults.
@@ -155,13 +177,19 @@ struct SoftReceivers {
 
 /// The selection word of a view sample (what SoftReceivers::sets and the GPU pipeline's per-sample
 /// buffer hold): set lightSampleSet(x, y, frame, K) in bits 0-7, and with R > 1 rotation steps the
-/// step floor(lightSampleRotationHash(x, y, frame, seed) * R / 2^32) in bits 8-15 (sintorn2008
-/// §4.2: neighbours get other sets and other rotations; temporal jitter by frame).
+/// step (floor(lightSampleRotationHash(x, y, frame / (K R), seed) * R / 2^32) + frame / K) mod R in
+/// bits 8-15. sintorn2008 §4.2: neighbours get other sets and other rotations; over K R consecutive
+/// frames (temporal jitter) a pixel takes every (set, step) pair exactly once — the set cycles every
+/// frame, the step advances once per set cycle from a per-pixel start — so a running average never
+/// repeats a pattern before it has used them all.
 inline uint32_t sampleBasedSoftSelection(uint32_t x, uint32_t y, uint32_t frame, uint32_t sets, uint32_t rotations,
                                          uint32_t seed = 0) {
     const uint32_t set = lightSampleSet(x, y, frame, sets);
-    const uint32_t step =
-        rotations > 1 ? static_cast<uint32_t>((uint64_t(lightSampleRotationHash(x, y, frame, seed)) * rotations) >> 32) : 0u;
+    if (rotations <= 1) return set;
+    const uint32_t k = std::max<uint32_t>(sets, 1u);
+    const uint32_t cycle = frame / k / rotations;
+    const uint32_t start = static_cast<uint32_t>((uint64_t(lightSampleRotationHash(x, y, cycle, seed)) * rotations) >> 32);
+    const uint32_t step = (start + frame / k % rotations) % rotations;
     return set | (step << 8);
 }
 
@@ -218,6 +246,9 @@ struct SampleBasedSoftCpuResult {
     uint64_t exact_tests = 0;       ///< per-sample oracle verdicts computed
     uint64_t triangles_culled = 0;  ///< SoftSkips::closed_casters: casters culled (each counted once)
     uint64_t pairs_cut = 0;         ///< SoftSkips::plane_cut: pairs skipped (not in `pairs`)
+    /// SoftSkips::closed_casters: (receiver, culled caster) pairs evaluated after all, the receiver
+    /// lying within the oracle's coplanar reach of a kept closed triangle (then in pairs or pairs_cut).
+    uint64_t pairs_recovered = 0;
 
     bool blocked(size_t r, uint32_t s) const { return (masks[r * words_per_receiver + s / 32] >> (s % 32)) & 1u; }
     uint32_t blockedCount(size_t r) const {
@@ -295,6 +326,16 @@ inline CasterPlane casterPlane(const glm::dvec3& v0, const glm::dvec3& v1, const
 
 /// SoftSkips::closed_casters: the whole light strictly behind the plane (culled when closed).
 inline bool casterFacesAway(const CasterPlane& c) { return c.light_side < 0.0 && c.light_clearance > 0.0; }
+
+/// p strictly on the plane's positive side (normal = (v1 - v0) x (v2 - v0): outside a closed,
+/// outward-oriented mesh's face): a segment from p to a light point in front of the face never
+/// crosses its plane, so it cannot leave a solid through it (SoftSkips::closed_casters).
+inline bool casterPlaneOutside(const CasterPlane& c, const glm::dvec3& p) {
+    if (!(c.normal_length > 0.0)) return false;
+    const glm::dvec3 to_p = p - c.v0;
+    const double side = oracle::dot3(c.normal, to_p);
+    return side > 0.0 && (side / c.normal_length - c.error_per_unit * oracle::length3(to_p)) * (1.0 - 1e-9) > 0.0;
+}
 
 /// SoftSkips::plane_cut: p and the whole light strictly on one side, both farther than `reach`.
 inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double reach) {
@@ -410,14 +451,27 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
         const double light_far = oracle::length3(frame.center) + light_reach;  // |x| over the light
 
+        // SoftSkips::closed_casters, exactly: sweep 0 evaluates every caster but the culled ones and
+        // finds whether p lies within the oracle's coplanar reach of a kept closed triangle (rule 2
+        // may then ignore the face a blocked segment leaves through: see SoftSkips); only then does
+        // sweep 1 evaluate the culled ones for p.
+        bool near_closed = false;
+        for (int sweep = 0; sweep < (cull ? 2 : 1); ++sweep)
         for (size_t t = 0; t < casters.triangle_count; ++t) {
+            if ((culled[t] != 0) != (sweep == 1) || (sweep == 1 && !near_closed)) continue;
             const glm::dvec3 v0(casters.positions[casters.indices[3 * t]]);
             const glm::dvec3 v1(casters.positions[casters.indices[3 * t + 1]]);
             const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
-            if (detail::degenerateTriangle(v0, v1, v2) || culled[t]) continue;
+            if (detail::degenerateTriangle(v0, v1, v2)) continue;
+            if (sweep == 1) ++result.pairs_recovered;
             // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
             const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
             const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
+            if (cull && sweep == 0 && !near_closed && casters.closed[t] != 0) {
+                const double reach_c = options.oracle.coplanar_epsilon * scale_hi;
+                near_closed = detail::pointTriangleDistance2<double>(p, v0, v1, v2) <= reach_c * reach_c * (1.0 + 1e-9) &&
+                              !soft::casterPlaneOutside(caster_planes[t], p);
+            }
             if (cut && soft::casterPlaneCuts(caster_planes[t], p, 2.0 * eps * scale_hi)) {
                 ++result.pairs_cut;
                 continue;
@@ -598,11 +652,12 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one
-/// slot per block and class; `closed`: the draw's casters are CasterClass::Closed). `lut` may be
+/// slot per block and class; `closed`: the draw's casters are CasterClass::Closed; `culled_pass`:
+/// the second pass over them, SoftSkips::closed_casters' culled triangles for near samples). `lut` may be
 /// null in Brute mode. Throws penumbra::Error when the LUT does not fit the sets.
 inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const LightSampleSets& sets,
                                        const LightLutSetup* lut, uint32_t sample_count, uint32_t block, bool has_sets,
-                                       bool closed = false) {
+                                       bool closed = false, bool culled_pass = false) {
     const uint32_t n = sets.count(), k = sets.sets();
     if (o.mode != SoftMode::Brute) {
         PENUMBRA_CHECK(lut != nullptr, "penumbra::SampleBasedSoftShadows: mode ", softModeName(o.mode), " needs a LUT");
@@ -631,7 +686,9 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
                    " needs a light symmetric about its local z axis (sphere, disk, ellipsoid with equal x and y)");
     const uint32_t flags = (o.skips.empty_blocks ? PENUMBRA_SBS_FLAG_SKIP_EMPTY : 0u) |
                            (o.skips.closed_casters && closed ? PENUMBRA_SBS_FLAG_CULL_CLOSED : 0u) |
-                           (o.skips.plane_cut ? PENUMBRA_SBS_FLAG_PLANE_CUT : 0u);
+                           (o.skips.plane_cut ? PENUMBRA_SBS_FLAG_PLANE_CUT : 0u) |
+                           (o.skips.silhouettes ? PENUMBRA_SBS_FLAG_SILHOUETTES : 0u) |
+                           (o.skips.closed_casters && closed && culled_pass ? PENUMBRA_SBS_FLAG_CULLED_PASS : 0u);
     p.reserved = glm::uvec4(o.rotations, flags, 0u, 0u);
     if (lut) p.lut = lut->params;
     return p;

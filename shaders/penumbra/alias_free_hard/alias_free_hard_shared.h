@@ -73,7 +73,12 @@
 // Fixed-6 two-pass light pass, always (copied from list block 0's spill header on the GPU):
 #define PENUMBRA_AFH_WORK_SPILL_COUNT 5     // header.count = 3 * triangles the spill pass drew
 #define PENUMBRA_AFH_WORK_SPILL_OVERFLOW 6  // header.overflow = triangles lost (spill array full)
-#define PENUMBRA_AFH_WORK_WORDS 8
+// What the skips removed (count_work): samples skip_shadowed did not retest, fragments clip_to_box
+// discarded, closed casters' triangles culled (back_faces_only / light_facing_only; list block 0).
+#define PENUMBRA_AFH_WORK_TESTS_SKIPPED 7
+#define PENUMBRA_AFH_WORK_FRAGMENTS_SKIPPED 8
+#define PENUMBRA_AFH_WORK_TRIANGLES_CULLED 9
+#define PENUMBRA_AFH_WORK_WORDS 12
 
 #ifdef __cplusplus
 namespace penumbra::shared {

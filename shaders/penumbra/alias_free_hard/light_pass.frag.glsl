@@ -51,17 +51,25 @@ layout(location = 3) flat in vec4 penumbraAfhBox;
 void main() {
 #if PENUMBRA_CONSERVATIVE_CLIP_TO_BOX
     // Pixels outside the triangle's pixel-expanded bounding box cannot hold a blocked sample.
-    if (!penumbraConservativeInsideBox(gl_FragCoord.xy, penumbraAfhBox)) discard;
+    if (!penumbraConservativeInsideBox(gl_FragCoord.xy, penumbraAfhBox)) {
+#if PENUMBRA_AFH_COUNT_WORK
+        atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS_SKIPPED], 1u);
+#endif
+        discard;
+    }
 #endif
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
     const float reach = penumbraAfhParams.tolerance.z;
     const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
     const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
-    uint tests = 0u, fallbacks = 0u;
+    uint tests = 0u, fallbacks = 0u, skipped = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
 #if PENUMBRA_AFH_SKIP_SHADOWED
-        if (penumbraSampleListsShadowBit(slot, 0u)) continue;
+        if (penumbraSampleListsShadowBit(slot, 0u)) {
+            ++skipped;
+            continue;
+        }
 #endif
         const vec3 p = penumbraSampleListsPosition(slot);
         ++tests;
@@ -77,5 +85,6 @@ void main() {
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], 1u);
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS], tests);
     if (fallbacks > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FALLBACKS], fallbacks);
+    if (skipped > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS_SKIPPED], skipped);
 #endif
 }

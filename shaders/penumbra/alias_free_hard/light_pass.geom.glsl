@@ -145,7 +145,12 @@ void main() {
         dvec3 to_light = penumbraAfhParams.light.w != 0.0 ? dvec3(penumbraAfhParams.light.xyz) - a
                                                            : dvec3(penumbraAfhParams.light.xyz);
         precise double facing = dot(cross(b - a, c - a), to_light);
-        if (facing >= 0.0) return;
+        if (facing >= 0.0) {
+#if PENUMBRA_AFH_COUNT_WORK
+            if (penumbraAfhParams.pass.x == 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES_CULLED], 1u);
+#endif
+            return;
+        }
     }
     if ((penumbraAfhParams.grid.w & PENUMBRA_AFH_FLAG_CLOSED_LIGHT_FACING) != 0u) {
         // light_facing_only: a closed caster's triangle with the light strictly behind its plane
@@ -163,7 +168,12 @@ void main() {
         precise double ll = (to_light.x * to_light.x + to_light.y * to_light.y) + to_light.z * to_light.z;
         precise double bound = (8.0LF * 1.1102230246251565404e-16LF * sqrt(e00) * sqrt(e11) +
                                 8.0LF * 1.1102230246251565404e-16LF * sqrt(nn)) * sqrt(ll);
-        if (facing < -bound * (1.0LF + 1e-9LF)) return;
+        if (facing < -bound * (1.0LF + 1e-9LF)) {
+#if PENUMBRA_AFH_COUNT_WORK
+            if (penumbraAfhParams.pass.x == 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES_CULLED], 1u);
+#endif
+            return;
+        }
     }
     // Direct pass: a triangle that needs clipping goes to penumbraAfhSpill and returns 0 here.
     int emitted = penumbraConservativeEmit(gl_in[0].gl_Position, gl_in[1].gl_Position, gl_in[2].gl_Position,

@@ -51,6 +51,16 @@ PenumbraSbsCasterPlane penumbraSbsCasterPlane(dvec3 v0, dvec3 v1, dvec3 v2, dvec
 // The whole light strictly behind the plane: a closed caster's triangle that cannot block.
 bool penumbraSbsCasterFacesAway(PenumbraSbsCasterPlane c) { return c.light_side < 0.0LF && c.light_clearance > 0.0LF; }
 
+// p strictly on the plane's positive side (outside a closed mesh's face): a segment from p to a
+// light point the face faces never crosses its plane.
+bool penumbraSbsCasterPlaneOutside(PenumbraSbsCasterPlane c, dvec3 p) {
+    if (!(c.normal_length > 0.0LF)) return false;
+    const dvec3 to_p = p - c.v0;
+    const double side = penumbraSbsDot(c.normal, to_p);
+    precise double clearance = (side / c.normal_length - c.error_per_unit * penumbraSbsLength(to_p)) * (1.0LF - 1e-9LF);
+    return side > 0.0LF && clearance > 0.0LF;
+}
+
 // p and the whole light strictly on one side of the plane, both farther than `reach`.
 bool penumbraSbsCasterPlaneCuts(PenumbraSbsCasterPlane c, dvec3 p, double reach) {
     if (!(c.light_clearance > reach)) return false;

@@ -27,6 +27,12 @@
 #ifndef PENUMBRA_SBS_COUNT_WORK
 #define PENUMBRA_SBS_COUNT_WORK 1
 #endif
+#ifndef PENUMBRA_SBS_SILHOUETTES
+#define PENUMBRA_SBS_SILHOUETTES 0  // 1: SoftSkips::silhouettes (the marks buffer is bound)
+#endif
+#ifndef PENUMBRA_SBS_CLOSED_CASTERS
+#define PENUMBRA_SBS_CLOSED_CASTERS 0  // 1: SoftSkips::closed_casters (the near buffer is bound)
+#endif
 
 layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
     PenumbraSbsParams penumbraSbsParams;
@@ -39,6 +45,12 @@ layout(std430, binding = PENUMBRA_SBS_MASKS_BINDING) buffer PenumbraSbsMasks { u
 layout(std430, binding = PENUMBRA_SBS_LUT_BINDING) readonly buffer PenumbraSbsLut { uvec4 penumbraSbsLut[]; };
 layout(std430, binding = PENUMBRA_SBS_SAMPLES_BINDING) readonly buffer PenumbraSbsSamples { dvec4 penumbraSbsSamples[]; };
 layout(std430, binding = PENUMBRA_SBS_SETS_BINDING) readonly buffer PenumbraSbsSets { uint penumbraSbsSets[]; };
+#if PENUMBRA_SBS_SILHOUETTES
+layout(std430, binding = PENUMBRA_SBS_MARKS_BINDING) readonly buffer PenumbraSbsMarks { uint penumbraSbsMarks[]; };
+#endif
+#if PENUMBRA_SBS_CLOSED_CASTERS
+layout(std430, binding = PENUMBRA_SBS_NEAR_BINDING) buffer PenumbraSbsNear { uint penumbraSbsNear[]; };
+#endif
 #if PENUMBRA_SBS_COUNT_WORK
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
 #endif
@@ -115,6 +127,17 @@ bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
 void main() {
     const PenumbraSbsParams P = penumbraSbsParams;
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), P.grid.w, P.grid.z);
+#if PENUMBRA_SBS_CLOSED_CASTERS
+    // The second pass over closed casters: texels without a flagged sample have nothing to do.
+    if ((P.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u &&
+        penumbraSbsNear[P.counts.x + uint(gl_FragCoord.y) * P.grid.x + uint(gl_FragCoord.x)] == 0u) {
+#if PENUMBRA_SBS_COUNT_WORK
+        atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
+        atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED], 1u);
+#endif
+        return;
+    }
+#endif
     if (range.y == 0u && (P.reserved.y & PENUMBRA_SBS_FLAG_SKIP_EMPTY) != 0u) {
         // SoftSkips::empty_blocks: an empty list block (an empty texel, or past its list's end) has
         // nothing to test, so none of the caster's per-fragment setup below (about half the light
@@ -130,8 +153,19 @@ void main() {
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
     // SoftSkips::plane_cut: T's plane against the light, once per fragment.
     const bool plane_cut = (P.reserved.y & PENUMBRA_SBS_FLAG_PLANE_CUT) != 0u;
+    const bool closed_first = (P.reserved.y & (PENUMBRA_SBS_FLAG_CULL_CLOSED | PENUMBRA_SBS_FLAG_CULLED_PASS)) ==
+                              PENUMBRA_SBS_FLAG_CULL_CLOSED;
     PenumbraSbsCasterPlane caster;
-    if (plane_cut) caster = penumbraSbsCasterPlane(v0, v1, v2, P.center.xyz, P.bounds.x);
+    if (plane_cut || closed_first) caster = penumbraSbsCasterPlane(v0, v1, v2, P.center.xyz, P.bounds.x);
+    // SoftSkips::silhouettes: outside every potential silhouette's influence region, no segment from
+    // a view sample to a light point crosses a silhouette edge, so the light is all visible or all
+    // blocked (laine2005 §3.3): T blocks every light sample when it blocks the centre, else none
+    // counts (the union over the casters is then the centre's verdict, which is every sample's).
+    bool hard_texel = false;
+#if PENUMBRA_SBS_SILHOUETTES
+    if ((P.reserved.y & PENUMBRA_SBS_FLAG_SILHOUETTES) != 0u)
+        hard_texel = penumbraSbsMarks[uint(gl_FragCoord.y) * P.grid.x + uint(gl_FragCoord.x)] == 0u;
+#endif
     // T's plane depends on T alone: built once per fragment, oriented per sample by negation (which
     // commutes exactly with every operation of penumbraSbsLocalPlane: the same bits as building it
     // flipped).
@@ -143,7 +177,13 @@ void main() {
     // the twin's rounding allowance: computed on the first pair that needs it (p in T's plane).
     double normal_length = -1.0LF;
     precise double light_gap = 0.0LF;
-    uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u;
+    uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u,
+         hard = 0u, recovered = 0u;
+    // SoftSkips::closed_casters (the twin's two sweeps): the first pass over a closed draw flags the
+    // samples within the oracle's coplanar reach of a kept triangle and not provably outside it (and
+    // their texel, after the samples' flags); the second pass gives only those the culled triangles.
+    const bool culled_pass = (P.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u;
+    const uint texel_flag = P.counts.x + uint(gl_FragCoord.y) * P.grid.x + uint(gl_FragCoord.x);
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const uint id = penumbraSampleListsId(slot);
@@ -152,21 +192,49 @@ void main() {
         if (set >= P.config.z) set = 0u;    // out of range: set 0 (the CPU twin rejects it)
         if (turn_step >= P.reserved.x) turn_step = 0u;  // ... unrotated
         const uint mask_base = id * words, sample_base = (set * P.reserved.x + turn_step) * n;
+#if PENUMBRA_SBS_CLOSED_CASTERS
+        if (culled_pass) {
+            if (penumbraSbsNear[id] == 0u) continue;
+            ++recovered;
+        }
+#endif
         // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
         const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
         const double centre_reach = penumbraSbsMaxAbs(P.center.xyz - p);
         const double s_min = max(0.0LF, centre_reach - P.bounds.x), s_max = centre_reach + P.bounds.x;
         const double scale_lo = max(scale_v, s_min), scale_hi = max(scale_v, s_max);
+        double distance2 = -1.0LF;  // p to T, squared: computed once, where first needed
+#if PENUMBRA_SBS_CLOSED_CASTERS
+        if (closed_first) {
+            distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
+            precise double reach_c = P.epsilon.x * scale_hi;
+            if (distance2 <= reach_c * reach_c * (1.0LF + 1e-9LF) && !penumbraSbsCasterPlaneOutside(caster, p)) {
+                penumbraSbsNear[id] = 1u;
+                penumbraSbsNear[texel_flag] = 1u;
+            }
+        }
+#endif
         precise double cut_reach = 2.0LF * P.epsilon.z * scale_hi;
         if (plane_cut && penumbraSbsCasterPlaneCuts(caster, p, cut_reach)) {
             ++cut;  // SoftSkips::plane_cut: p and the whole light on one side of T's plane
             continue;
         }
         ++pairs;
+        if (hard_texel) {
+            ++hard;
+            ++tests;
+            if (penumbraAfhBlocks(v0, v1, v2, p, P.center.xyz, P.epsilon.x, 0.0LF)) {
+                for (uint w = 0u; w < words; ++w) {
+                    const uint bits = 32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u;
+                    atomicOr(penumbraSbsMasks[mask_base + w], bits);
+                }
+            }
+            continue;
+        }
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
         PenumbraSbsPlane planes[4];
         if (!all_exact) {
-            const double distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
+            if (distance2 < 0.0LF) distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
             precise double ignore = P.epsilon.x * scale_lo;
             if (distance2 < ignore * ignore * (1.0LF - 1e-9LF)) {  // the oracle ignores T for every sample
                 ++ignored;
@@ -286,5 +354,7 @@ void main() {
     if (tests != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_EXACT_TESTS], tests);
     if (unproven_planes != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PLANES_UNPROVEN], unproven_planes);
     if (cut != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_CUT], cut);
+    if (hard != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_HARD], hard);
+    if (recovered != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_RECOVERED], recovered);
 #endif
 }

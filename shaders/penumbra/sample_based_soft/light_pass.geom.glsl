@@ -49,9 +49,13 @@ void main() {
         // behind its plane is never the face a blocked segment leaves the solid through: culled.
         const PenumbraSbsCasterPlane c =
             penumbraSbsCasterPlane(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz, penumbraSbsParams.bounds.x);
-        if (penumbraSbsCasterFacesAway(c)) {
+        // The second pass (PENUMBRA_SBS_FLAG_CULLED_PASS) draws exactly the culled ones, for the
+        // samples within the oracle's coplanar reach of a kept closed triangle.
+        const bool culled_pass = (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u;
+        const bool away = penumbraSbsCasterFacesAway(c);
+        if (away != culled_pass) {
 #if PENUMBRA_SBS_COUNT_WORK
-            if (penumbraSbsParams.grid.w == 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+            if (away && penumbraSbsParams.grid.w == 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
 #endif
             return;
         }

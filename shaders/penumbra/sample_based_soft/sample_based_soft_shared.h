@@ -41,6 +41,14 @@
 #define PENUMBRA_SBS_SETS_BINDING 8       // uint[sample_count]: selection word per view-sample id (bits 0-7
                                           // the set, bits 8-15 the rotation step)
 #endif
+#ifndef PENUMBRA_SBS_MARKS_BINDING
+#define PENUMBRA_SBS_MARKS_BINDING 9      // uint[W * H]: penumbra texels (SoftSkips::silhouettes; light pass
+                                          // and silhouette pass)
+#endif
+#ifndef PENUMBRA_SBS_NEAR_BINDING
+#define PENUMBRA_SBS_NEAR_BINDING 10      // uint[sample_count]: the sample lies within the oracle's coplanar
+                                          // reach of a kept closed triangle (SoftSkips::closed_casters)
+#endif
 #ifndef PENUMBRA_SBS_HEADER_BINDING
 #define PENUMBRA_SBS_HEADER_BINDING 5     // the lists' header (block predicate pass only)
 #endif
@@ -84,13 +92,18 @@
 #define PENUMBRA_SBS_WORK_TRIANGLES_CULLED 9   // closed casters' triangles facing away from the whole light
                                                // (counted in list block 0 only)
 #define PENUMBRA_SBS_WORK_PAIRS_CUT 10         // pairs whose receiver and light lie on one side of the caster
-#define PENUMBRA_SBS_WORK_WORDS 12
+#define PENUMBRA_SBS_WORK_PAIRS_HARD 11        // pairs outside every silhouette's region: one test from the centre
+#define PENUMBRA_SBS_WORK_PAIRS_RECOVERED 12   // culled casters' pairs evaluated after all (near receivers)
+#define PENUMBRA_SBS_WORK_WORDS 16
 
 // Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.
 #define PENUMBRA_SBS_FLAG_SKIP_EMPTY 1u      // empty list blocks return before the caster's setup
 #define PENUMBRA_SBS_FLAG_CULL_CLOSED 2u     // this draw's casters are closed: cull triangles the whole
                                              // light is strictly behind
 #define PENUMBRA_SBS_FLAG_PLANE_CUT 4u       // skip pairs with p and the light on one side of T's plane
+#define PENUMBRA_SBS_FLAG_SILHOUETTES 8u     // texels no potential silhouette's region marked: one hard test
+#define PENUMBRA_SBS_FLAG_CULLED_PASS 16u    // the second pass over closed casters: only the culled triangles,
+                                             // only for samples flagged near (with PENUMBRA_SBS_FLAG_CULL_CLOSED)
 
 #ifdef __cplusplus
 namespace penumbra::shared {  // C++: include penumbra/light_lut.hpp first (PenumbraLutParams)

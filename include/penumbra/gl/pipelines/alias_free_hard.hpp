@@ -247,6 +247,9 @@ public:
         f.tests = work[PENUMBRA_AFH_WORK_TESTS];
         f.triangles_emitted = work[PENUMBRA_AFH_WORK_TRIANGLES];
         f.fallbacks = work[PENUMBRA_AFH_WORK_FALLBACKS];
+        f.tests_skipped = work[PENUMBRA_AFH_WORK_TESTS_SKIPPED];
+        f.fragments_skipped = work[PENUMBRA_AFH_WORK_FRAGMENTS_SKIPPED];
+        f.triangles_culled = work[PENUMBRA_AFH_WORK_TRIANGLES_CULLED];
         f.spill_overflow = work[PENUMBRA_AFH_WORK_SPILL_OVERFLOW];
         f.spilled = work[PENUMBRA_AFH_WORK_SPILL_COUNT] / 3u + f.spill_overflow;
         return f;

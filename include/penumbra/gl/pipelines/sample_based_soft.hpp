@@ -95,6 +95,8 @@ struct SbsBindings {
     uint32_t texels = PENUMBRA_SBS_TEXELS_BINDING;
     uint32_t visibility = PENUMBRA_SBS_VISIBILITY_BINDING;
     uint32_t resolve_offsets = PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING;
+    uint32_t marks = PENUMBRA_SBS_MARKS_BINDING;  ///< SoftSkips::silhouettes
+    uint32_t near_samples = PENUMBRA_SBS_NEAR_BINDING;  ///< SoftSkips::closed_casters
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -115,6 +117,11 @@ struct SampleBasedSoftFrame {
     /// What the skips removed (SoftSkips; count_work): fragments of empty list blocks that returned
     /// at once, closed casters' triangles culled (per frame, not per block), pairs cut by T's plane.
     uint64_t fragments_skipped = 0, triangles_culled = 0, pairs_cut = 0;
+    /// SoftSkips::silhouettes: pairs outside every silhouette's region (one exact test each).
+    uint64_t pairs_hard = 0;
+    /// SoftSkips::closed_casters: culled triangles' pairs evaluated after all in the second pass, the
+    /// sample lying within the oracle's coplanar reach of a kept closed triangle.
+    uint64_t pairs_recovered = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -125,6 +132,9 @@ public:
     /// Draws every caster of one class (CasterClass::Closed: watertight, outward-oriented meshes,
     /// culled per SoftSkips::closed_casters; Open: the rest), as the hard pipeline's callback.
     using DrawCasters = std::function<void(CasterClass)>;
+    /// SoftSkips::silhouettes: draws every caster (both classes) as GL_TRIANGLES_ADJACENCY
+    /// (penumbra::triangleAdjacency's indices, positions as for DrawCasters) with the bound program.
+    using DrawAdjacency = std::function<void()>;
 
     SampleBasedSoftShadows(const SampleBasedSoftGpuOptions& options, const LightSampleSets& sets, const LightLutSetup* lut,
                            const InfluenceRegionSetup& influence, const glm::mat4& view_projection,
@@ -145,7 +155,8 @@ public:
         // Checks the LUT against the sets and the mode (throws).
         (void)sampleBasedSoftParams(options_, sets_, lut, 0, 0, false);
         const GLint fragment_blocks = gl::getInteger(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS);
-        const GLint needed = options_.count_work ? 9 : 8;
+        const GLint needed = (options_.count_work ? 9 : 8) + (options_.skips.silhouettes ? 1 : 0) +
+                             (options_.skips.closed_casters ? 1 : 0);
         PENUMBRA_CHECK(fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
                        fragment_blocks, ", the light pass needs ", needed);
         if (options_.count_work) {
@@ -155,6 +166,8 @@ public:
         }
         ShaderDefines defines = influence.defines;
         defines.push_back({"PENUMBRA_SBS_COUNT_WORK", options_.count_work ? "1" : "0"});
+        defines.push_back({"PENUMBRA_SBS_SILHOUETTES", options_.skips.silhouettes ? "1" : "0"});
+        defines.push_back({"PENUMBRA_SBS_CLOSED_CASTERS", options_.skips.closed_casters ? "1" : "0"});
         const SbsBindings& b = bindings_;
         const std::pair<const char*, uint32_t> binding_defines[] = {
             {"PENUMBRA_SBS_PARAMS_BINDING", b.params},       {"PENUMBRA_SBS_INFLUENCE_BINDING", b.influence},
@@ -164,7 +177,8 @@ public:
             {"PENUMBRA_SBS_LUT_BINDING", b.lut},             {"PENUMBRA_SBS_SAMPLES_BINDING", b.samples},
             {"PENUMBRA_SBS_SETS_BINDING", b.sets},           {"PENUMBRA_SBS_HEADER_BINDING", b.header},
             {"PENUMBRA_SBS_SLOTS_BINDING", b.slots},         {"PENUMBRA_SBS_TEXELS_BINDING", b.texels},
-            {"PENUMBRA_SBS_VISIBILITY_BINDING", b.visibility}, {"PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING", b.resolve_offsets}};
+            {"PENUMBRA_SBS_VISIBILITY_BINDING", b.visibility}, {"PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING", b.resolve_offsets},
+            {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         light_pass_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
                                         "penumbra/sample_based_soft/light_pass.geom.glsl",
@@ -173,10 +187,21 @@ public:
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
+        if (options_.skips.silhouettes) {
+            ShaderDefines edge_defines;  // the influence setup's, uncut: the cut is a triangle's
+            for (const auto& d : defines)
+                if (d.name != "PENUMBRA_INFLUENCE_CUT") edge_defines.push_back(d);
+            edge_defines.push_back({"PENUMBRA_INFLUENCE_CUT", "0"});
+            silhouettes_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
+                                             "penumbra/sample_based_soft/silhouettes.geom.glsl",
+                                             "penumbra/sample_based_soft/silhouettes.frag.glsl"},
+                                            edge_defines, library);
+            marks_ = gl::Buffer(size_t(options_.grid_width) * options_.grid_height * 4);
+        }
         ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
         ssbo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
         param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(SbsParams), ubo_alignment_) * ubo_alignment_);
-        params_staging_.assign(size_t(param_stride_) * (1 + 2 * options_.max_list_blocks), 0u);
+        params_staging_.assign(size_t(param_stride_) * (1 + 3 * options_.max_list_blocks), 0u);
         params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
         influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
         const std::vector<glm::dvec4> world = sampleBasedSoftSampleTable(sets_, options_.rotations);
@@ -213,6 +238,8 @@ public:
         if (!lists_.reserve(s, max_samples)) return;
         const size_t samples = lists_.samples;
         masks_ = gl::Buffer(samples * words_ * 4);
+        if (options_.skips.closed_casters)  // per sample, then per texel
+            near_ = gl::Buffer((samples + size_t(options_.grid_width) * options_.grid_height) * 4);
         visibility_ = gl::Buffer(samples * 4);
         reserved_ = lists_.samples;
         gl::checkErrors("penumbra::SampleBasedSoftShadows::reserve");
@@ -235,8 +262,8 @@ public:
 
     /// Every pass for buffer input (see the summary). `lut_table` may be empty in Brute mode.
     Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
-               const DrawCasters& draw_casters, const SbsFrameBuffers& frame = {}) {
-        const Status s = begin(sample_count, lut_table, draw_casters, frame);
+               const DrawCasters& draw_casters, const SbsFrameBuffers& frame = {}, const DrawAdjacency& draw_adjacency = {}) {
+        const Status s = begin(sample_count, lut_table, draw_casters, frame, draw_adjacency);
         if (s != Status::Ok) return s;
         if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
@@ -249,10 +276,10 @@ public:
     /// Every pass for depth input (positions reconstructed on the GPU from the engine's depth
     /// buffer; sample count = view width * height, id = y * width + x). The normal texture may be 0.
     Status run(const SampleDepthInput& input, const BufferRange& lut_table, const DrawCasters& draw_casters,
-               const SbsFrameBuffers& frame = {}) {
+               const SbsFrameBuffers& frame = {}, const DrawAdjacency& draw_adjacency = {}) {
         const uint64_t n = uint64_t(input.view.width) * input.view.height;
         if (n > reserved_) return fail(Status::NotReserved);
-        const Status s = begin(static_cast<uint32_t>(n), lut_table, draw_casters, frame);
+        const Status s = begin(static_cast<uint32_t>(n), lut_table, draw_casters, frame, draw_adjacency);
         if (s != Status::Ok) return s;
         if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
@@ -280,6 +307,8 @@ public:
         f.fragments_skipped = w[PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED];
         f.triangles_culled = w[PENUMBRA_SBS_WORK_TRIANGLES_CULLED];
         f.pairs_cut = w[PENUMBRA_SBS_WORK_PAIRS_CUT];
+        f.pairs_hard = w[PENUMBRA_SBS_WORK_PAIRS_HARD];
+        f.pairs_recovered = w[PENUMBRA_SBS_WORK_PAIRS_RECOVERED];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
@@ -290,6 +319,12 @@ public:
     /// The executor's masks / visibility of the last run (waits): sample_count * words / sample_count.
     std::vector<uint32_t> readMasks() const { return masks_.download<uint32_t>(0, size_t(setup_.sample_count) * words_); }
     std::vector<float> readVisibility() const { return visibility_.download<float>(0, setup_.sample_count); }
+    /// SoftSkips::silhouettes: the last run's texel marks (W x H, row-major; nonzero = some potential
+    /// silhouette's region covers the texel); empty when the skip is off. Waits.
+    std::vector<uint32_t> readMarks() const {
+        if (!options_.skips.silhouettes) return {};
+        return marks_.download<uint32_t>(0, size_t(options_.grid_width) * options_.grid_height);
+    }
 
     BufferRange masks() const { return {masks_.id(), 0, masks_.size()}; }
     BufferRange visibility() const { return {visibility_.id(), 0, visibility_.size()}; }
@@ -310,7 +345,10 @@ private:
     InfluenceRegionSetup influence_;
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
-    gl::Program light_pass_, blocks_, resolve_;
+    gl::Program light_pass_, blocks_, resolve_, silhouettes_;
+    gl::Buffer marks_;                                // SoftSkips::silhouettes: W x H texel marks
+    gl::Buffer near_;                                 // SoftSkips::closed_casters: per sample
+    const DrawAdjacency* draw_adjacency_ = nullptr;   // this run's (begin() .. the light pass)
     gl::Buffer params_, influence_params_, samples_, work_, dummy_;
     SampleListStorage lists_;
     gl::Buffer masks_, visibility_;
@@ -335,9 +373,10 @@ private:
     }
 
     Status begin(uint32_t sample_count, const BufferRange& lut_table, const DrawCasters& draw_casters,
-                 const SbsFrameBuffers& frame) {
+                 const SbsFrameBuffers& frame, const DrawAdjacency& draw_adjacency) {
         if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
-        if (!draw_casters) return fail(Status::InvalidArgument);
+        if (!draw_casters || (options_.skips.silhouettes && !draw_adjacency)) return fail(Status::InvalidArgument);
+        draw_adjacency_ = &draw_adjacency;
         if (options_.mode != SoftMode::Brute && !lut_table.holds(lut_.tableBytes())) return fail(Status::RangeTooSmall);
         if (!frame.sets.empty() && !frame.sets.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
         if (!frame.masks.empty() && !frame.masks.holds(uint64_t(sample_count) * words_ * 4)) return fail(Status::RangeTooSmall);
@@ -374,12 +413,14 @@ private:
     void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
-        // Slot 0: the predicate pass and the resolve; 1 + 2 b + c: list block b, class c (0 closed).
-        for (uint32_t slot = 0; slot <= 2 * options_.max_list_blocks; ++slot) {
-            const uint32_t block = slot == 0 ? 0u : (slot - 1) / 2;
-            const bool closed = slot != 0 && (slot - 1) % 2 == 0;
+        // Slot 0: the predicate pass and the resolve; 1 + 3 b + c: list block b, c = 0 closed, 1 open,
+        // 2 closed again (SoftSkips::closed_casters' second pass).
+        for (uint32_t slot = 0; slot <= 3 * options_.max_list_blocks; ++slot) {
+            const uint32_t block = slot == 0 ? 0u : (slot - 1) / 3;
+            const uint32_t c = slot == 0 ? 1u : (slot - 1) % 3;
             // Validated at construction: cannot throw.
-            const SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, closed);
+            const SbsParams p =
+                sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
             std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
         glNamedBufferSubData(params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
@@ -390,6 +431,11 @@ private:
                                   static_cast<GLsizeiptr>(std::min<uint64_t>(mask_bytes, masks.size)), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &zero);
         glClearNamedBufferSubData(work_.id(), GL_R32UI, 0, PENUMBRA_SBS_WORK_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        if (options_.skips.closed_casters)
+            glClearNamedBufferSubData(near_.id(), GL_R32UI, 0,
+                                      static_cast<GLsizeiptr>((size_t(setup_.sample_count) +
+                                                               size_t(options_.grid_width) * options_.grid_height) * 4),
+                                      GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
         glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
@@ -407,6 +453,18 @@ private:
             glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
             glEndQuery(GL_ANY_SAMPLES_PASSED);
         }
+        // (2b) SoftSkips::silhouettes: mark the texels of every potential silhouette's region.
+        if (options_.skips.silhouettes) {
+            glClearNamedBufferSubData(marks_.id(), GL_R32UI, 0, static_cast<GLsizeiptr>(marks_.size()), GL_RED_INTEGER,
+                                      GL_UNSIGNED_INT, &zero);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            silhouettes_.use();
+            bindParams(0);
+            glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+            (*draw_adjacency_)();
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
         // (3) Light pass, block by block; blocks no list needs are skipped by the GPU.
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
@@ -422,6 +480,8 @@ private:
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.lut, lut_table);
         }
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
+        if (options_.skips.silhouettes) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+        if (options_.skips.closed_casters) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.near_samples, near_.id());
         if (has_sets) {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
         } else {
@@ -430,11 +490,22 @@ private:
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
             for (uint32_t c = 0; c < 2; ++c) {
-                bindParams(1 + 2 * b + c);
+                bindParams(1 + 3 * b + c);
                 light_pass_.use();
                 draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
             }
             glEndConditionalRender();
+        }
+        if (options_.skips.closed_casters) {
+            // The culled triangles, for the samples the first pass flagged near a kept closed one.
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                bindParams(1 + 3 * b + 2);
+                light_pass_.use();
+                draw_casters(CasterClass::Closed);
+                glEndConditionalRender();
+            }
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         if (!timers_.empty()) timers_[1].end();

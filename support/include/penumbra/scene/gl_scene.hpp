@@ -14,6 +14,7 @@
 #ifndef PENUMBRA_SCENE_GL_SCENE_HPP
 #define PENUMBRA_SCENE_GL_SCENE_HPP
 
+#include "penumbra/adjacency.hpp"
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/shader.hpp"
 #include "penumbra/scene/scene.hpp"
@@ -67,7 +68,17 @@ public:
         vertices_ = gl::Buffer::fromVector(vertices);
         indices_ = gl::Buffer::fromVector(indices);
         face_normals_ = gl::Buffer::fromVector(faces);
+        // Triangles with adjacency (by position), for the soft pipeline's silhouette skip.
+        const std::vector<uint32_t> adjacency =
+            penumbra::triangleAdjacency(positions_.data(), positions_.size(), indices.data(), indices.size());
+        adjacency_ = gl::Buffer::fromVector(adjacency);
         glCreateVertexArrays(1, &vao_);
+        glCreateVertexArrays(1, &adjacency_vao_);
+        if (vertices_.id()) glVertexArrayVertexBuffer(adjacency_vao_, 0, vertices_.id(), 0, 6 * sizeof(float));
+        if (adjacency_.id()) glVertexArrayElementBuffer(adjacency_vao_, adjacency_.id());
+        glEnableVertexArrayAttrib(adjacency_vao_, 0);
+        glVertexArrayAttribFormat(adjacency_vao_, 0, 3, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(adjacency_vao_, 0, 0);
         if (vertices_.id()) {
             glVertexArrayVertexBuffer(vao_, 0, vertices_.id(), 0, 6 * sizeof(float));
         }
@@ -83,7 +94,9 @@ public:
         : vertices_(std::move(other.vertices_)),
           indices_(std::move(other.indices_)),
           face_normals_(std::move(other.face_normals_)),
+          adjacency_(std::move(other.adjacency_)),
           vao_(std::exchange(other.vao_, 0)),
+          adjacency_vao_(std::exchange(other.adjacency_vao_, 0)),
           index_count_(other.index_count_),
           ranges_(std::move(other.ranges_)),
           positions_(std::move(other.positions_)),
@@ -93,6 +106,7 @@ public:
     GpuScene& operator=(const GpuScene&) = delete;
     ~GpuScene() {
         if (vao_) glDeleteVertexArrays(1, &vao_);
+        if (adjacency_vao_) glDeleteVertexArrays(1, &adjacency_vao_);
     }
 
     GLuint vertexArray() const { return vao_; }
@@ -111,6 +125,13 @@ public:
         glBindVertexArray(vao_);
         if (index_count_) glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(index_count_), GL_UNSIGNED_INT, nullptr);
     }
+    /// Draws every mesh as GL_TRIANGLES_ADJACENCY (penumbra::triangleAdjacency over all meshes,
+    /// positions at attribute 0): a soft pipeline's DrawAdjacency callback.
+    void drawAdjacency() const {
+        glBindVertexArray(adjacency_vao_);
+        if (index_count_)
+            glDrawElements(GL_TRIANGLES_ADJACENCY, static_cast<GLsizei>(2 * index_count_), GL_UNSIGNED_INT, nullptr);
+    }
     /// Draws the closed meshes (closed = true) or the others: a pipeline's caster callback
     /// (CasterClass::Closed / Open).
     void drawClass(bool closed) const {
@@ -126,8 +147,8 @@ public:
     }
 
 private:
-    gl::Buffer vertices_, indices_, face_normals_;
-    GLuint vao_ = 0;
+    gl::Buffer vertices_, indices_, face_normals_, adjacency_;
+    GLuint vao_ = 0, adjacency_vao_ = 0;
     uint32_t index_count_ = 0;
     std::vector<Range> ranges_;
     std::vector<glm::vec3> positions_;
