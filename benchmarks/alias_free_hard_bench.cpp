@@ -375,22 +375,12 @@ private:
     penumbra::detail::DispatchGrid grid_;
 };
 
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t m = v.size() / 2;
-    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
 
 /// One timed method of the entry.
-struct Method {
-    std::string name;  ///< counter suffix: ms_<name>, err_<name>
-    std::function<void()> run;
-    std::vector<double> wall, query;  ///< per iteration: both readings of timeGpu
-    double medianMs(bool use_query) const {
-        std::vector<double> v = use_query ? query : wall;
-        return 1e3 * median(std::move(v));
-    }
+struct Method : penumbra::bench::TimedMethod {
+    Method(std::string n, std::function<void()> r, std::vector<double> w = {}, std::vector<double> q = {})
+        : penumbra::bench::TimedMethod{std::move(n), std::move(r), std::move(w), std::move(q)} {}
+    double medianMs(bool use_query) const { return ms(use_query); }
 };
 
 void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
@@ -433,21 +423,11 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         // One timing method for the whole entry: GL_TIME_ELAPSED only when it measured every
         // timed call (llvmpipe answers some calls with a timestamp, not a duration), else the
         // glFinish + wall-clock reading of every call.
-        bool query_measures = true;
-        for (Method& m : methods) timeGpu(m.run);  // warm-up
-        size_t iteration = 0;
-        for (auto _ : state) {
-            double hard_seconds = 0.0;
-            for (size_t k = 0; k < methods.size(); ++k) {
-                const size_t which = (k + iteration) % methods.size();
-                const double seconds = timeGpu(methods[which].run);
-                methods[which].wall.push_back(penumbra::bench::lastWallSeconds());
-                methods[which].query.push_back(penumbra::bench::lastQuerySeconds());
-                query_measures &= penumbra::bench::timerCounter() > 0.5;
-                if (which == 0) hard_seconds = seconds;
-            }
-            state.SetIterationTime(hard_seconds);
-            ++iteration;
+        std::vector<penumbra::bench::TimedMethod> timed(methods.begin(), methods.end());
+        const bool query_measures = penumbra::bench::timeInterleaved(state, timed);
+        for (size_t k = 0; k < methods.size(); ++k) {
+            methods[k].wall = timed[k].wall;
+            methods[k].query = timed[k].query;
         }
         gl::checkErrors("alias_free_hard_bench");
         if (!runs_ok) {

@@ -1,14 +1,21 @@
 // Shared helpers for penumbra_bench: one GL context for every GL benchmark (created on first use,
 // backend from PENUMBRA_GL), the smoke flag ctest sets (PENUMBRA_BENCH_SMOKE=1) so each
-// benchmark can shrink its sizes to run once in seconds, and the one GPU timing method.
+// benchmark can shrink its sizes to run once in seconds, the one GPU timing method, and the
+// interleaved timing of several methods inside one entry.
 #ifndef PENUMBRA_BENCHMARKS_BENCH_COMMON_HPP
 #define PENUMBRA_BENCHMARKS_BENCH_COMMON_HPP
 
 #include <penumbra/gl/headless.hpp>
 
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
 
 namespace penumbra::bench {
 
@@ -74,6 +81,47 @@ inline double timerCounter() { return detail::timeElapsedMeasures() ? 1.0 : 0.0;
 /// for every method of the entry.
 inline double lastWallSeconds() { return detail::lastTiming().wall; }
 inline double lastQuerySeconds() { return detail::lastTiming().query; }
+
+inline double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+/// One timed method of an entry.
+struct TimedMethod {
+    std::string name;  ///< counter suffix
+    std::function<void()> run;
+    std::vector<double> wall{}, query{};  ///< per iteration: both readings of timeGpu
+    double ms(bool use_query) const { return 1e3 * median(use_query ? query : wall); }
+};
+
+/// One warm-up call of every method, then per benchmark iteration one timed call of every method,
+/// interleaved (the first rotates with the iteration, so none always runs after the others). The
+/// entry's manual time is methods[0]'s. Sets timer_gl_time_elapsed and returns whether the
+/// GL_TIME_ELAPSED query measured every call (then every method's ms() should use it, else every
+/// method's wall clock: one timing method for the whole entry).
+inline bool timeInterleaved(benchmark::State& state, std::vector<TimedMethod>& methods) {
+    for (TimedMethod& m : methods) timeGpu(m.run);
+    bool query_measures = true;
+    size_t iteration = 0;
+    for (auto _ : state) {
+        double first = 0.0;
+        for (size_t k = 0; k < methods.size(); ++k) {
+            const size_t which = (k + iteration) % methods.size();
+            const double seconds = timeGpu(methods[which].run);
+            methods[which].wall.push_back(lastWallSeconds());
+            methods[which].query.push_back(lastQuerySeconds());
+            query_measures &= timerCounter() > 0.5;
+            if (which == 0) first = seconds;
+        }
+        state.SetIterationTime(first);
+        ++iteration;
+    }
+    state.counters["timer_gl_time_elapsed"] = query_measures ? 1.0 : 0.0;
+    return query_measures;
+}
 
 }  // namespace penumbra::bench
 

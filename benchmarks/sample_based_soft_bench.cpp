@@ -391,42 +391,12 @@ void setScene(benchmark::State& state, const View& v, uint32_t n) {
 // ---------------------------------------------------------------------------------------------
 // Timing
 
-double median(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t m = v.size() / 2;
-    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
+using Method = penumbra::bench::TimedMethod;
 
-/// One timed method of an entry.
-struct Method {
-    std::string name;  ///< counter suffix ("" for the entry's own method)
-    std::function<void()> run;
-    std::vector<double> wall{}, query{};  ///< per iteration: both readings of timeGpu
-    double ms(bool use_query) const { return 1e3 * median(use_query ? query : wall); }
-};
-
-/// One warm-up call of every method, then per iteration one timed call of every method,
-/// interleaved (the first rotates). The manual time is methods[0]'s. Returns whether the
-/// GL_TIME_ELAPSED query measured every call (else every ms_* uses the wall clock).
+/// penumbra::bench::timeInterleaved, then ms (methods[0]) and ms_<name> (the others). Returns
+/// whether the GL_TIME_ELAPSED query measured every call (else every ms_* uses the wall clock).
 bool timeMethods(benchmark::State& state, std::vector<Method>& methods) {
-    for (Method& m : methods) timeGpu(m.run);
-    bool query_measures = true;
-    size_t iteration = 0;
-    for (auto _ : state) {
-        double first = 0.0;
-        for (size_t k = 0; k < methods.size(); ++k) {
-            const size_t which = (k + iteration) % methods.size();
-            const double seconds = timeGpu(methods[which].run);
-            methods[which].wall.push_back(penumbra::bench::lastWallSeconds());
-            methods[which].query.push_back(penumbra::bench::lastQuerySeconds());
-            query_measures &= penumbra::bench::timerCounter() > 0.5;
-            if (which == 0) first = seconds;
-        }
-        state.SetIterationTime(first);
-        ++iteration;
-    }
-    state.counters["timer_gl_time_elapsed"] = query_measures ? 1.0 : 0.0;
+    const bool query_measures = penumbra::bench::timeInterleaved(state, methods);
     for (const Method& m : methods) state.counters[m.name.empty() ? "ms" : "ms_" + m.name] = m.ms(query_measures);
     return query_measures;
 }
