@@ -10,7 +10,8 @@
 //
 // Integration summary
 //   needs:    GL 4.5 with fp64 in shaders (the planes and the exact test are fp64 in every mode),
-//             geometry shaders, 9 fragment-stage storage blocks (checked at construction);
+//             geometry shaders, 8 fragment-stage storage blocks plus one each for count_work,
+//             skips.closed_casters and skips.silhouettes (checked at construction);
 //             shaders penumbra/sample_based_soft/*, penumbra/alias_free_hard/{caster_position,
 //             blocker_test,degenerate}.glsl and blocks.vert.glsl, penumbra/influence_region/*,
 //             penumbra/light_lut/lookup.glsl, penumbra/sample_lists/*.
@@ -158,7 +159,8 @@ public:
         const GLint needed = (options_.count_work ? 9 : 8) + (options_.skips.silhouettes ? 1 : 0) +
                              (options_.skips.closed_casters ? 1 : 0);
         PENUMBRA_CHECK(fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
-                       fragment_blocks, ", the light pass needs ", needed);
+                       fragment_blocks, ", the light pass needs ", needed,
+                       " (8, plus one each for count_work, skips.closed_casters and skips.silhouettes)");
         if (options_.count_work) {
             const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
             PENUMBRA_CHECK(geometry_blocks >= 1, "penumbra::SampleBasedSoftShadows: GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS = ",
