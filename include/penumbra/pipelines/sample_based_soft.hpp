@@ -136,8 +136,10 @@ struct SoftSkips {
     /// bits or none. Why nothing changes: as a light point moves over the light, whether its segment
     /// to p meets the casters changes only where the segment crosses a silhouette edge, and outside
     /// every silhouette's region no segment from p to the light does; so every light sample has the
-    /// centre's verdict, and the casters that block the centre are exactly those needed. Counted:
-    /// pairs_hard.
+    /// centre's verdict, and the casters that block the centre are exactly those needed. Needs every
+    /// receiver in front of the influence setup's far plane by 2^-12 of the far plane's distance
+    /// from the light (edges crossing it are clipped that far in front of it; the demo's plane lies
+    /// 1 % beyond the farthest receiver). Counted: pairs_hard.
     bool silhouettes = false;
 };
 

@@ -80,8 +80,9 @@ void penumbraSbsEdge(vec3 x, vec3 y, vec3 z, vec3 n) {
     precise float sx = penumbraInfluenceDot3(P.far_plane.xyz, qx) + P.far_plane.w;
     precise float sy = penumbraInfluenceDot3(P.far_plane.xyz, qy) + P.far_plane.w;
     if (!(sx < 0.0) && !(sy < 0.0)) return;  // wholly beyond F
-    if (!(sx < 0.0)) t0 = max(t0, sx / (sx - sy) * (1.0 + 1.0 / 4096.0));  // y in front
-    if (!(sy < 0.0)) t1 = min(t1, sx / (sx - sy) * (1.0 - 1.0 / 4096.0));  // x in front
+    // The kept end lies at s = 2^-12 s_front (s_front < 0: the front endpoint's), in front of F.
+    if (!(sx < 0.0)) t0 = max(t0, (sx - sy / 4096.0) / (sx - sy));        // y in front
+    if (!(sy < 0.0)) t1 = min(t1, sx * (1.0 - 1.0 / 4096.0) / (sx - sy));  // x in front
     if (!(t0 <= t1)) return;
     const vec3 a = t0 > 0.0 ? x + t0 * (y - x) : x, b = t1 < 1.0 ? x + t1 * (y - x) : y;
     const int count = penumbraInfluenceRegion(a, b, b, penumbraSbsInfluence);

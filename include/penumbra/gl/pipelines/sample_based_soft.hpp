@@ -46,11 +46,14 @@
 //             times; readMasks() / readVisibility().
 //   per frame: run() — (1) lists (count, scan, scatter; the influence setup's view-projection)
 //             + statistics, (2) a predicate pass: one point per list block inside an occlusion
-//             query, surviving when the longest list needs that block, (3) the light pass: for
-//             each block b < max_list_blocks under glBeginConditionalRender(query b), every caster
-//             drawn (closed, then open) into a W x H framebuffer with no attachments; the geometry stage culls (skips) and emits the
-//             influence region, each fragment walks its texel's list block (see
-//             light_pass.frag.glsl), (4) resolve. Nothing is read back, queried, allocated or
+//             query, surviving when the longest list needs that block, (2b) with
+//             skips.silhouettes the silhouette pass (your DrawAdjacency once), (3) the light pass:
+//             for each block b < max_list_blocks under glBeginConditionalRender(query b), every
+//             caster drawn (your callback with Closed, then Open) into a W x H framebuffer with no
+//             attachments; the geometry stage culls (skips) and emits the influence region, each
+//             fragment walks its texel's list block (see light_pass.frag.glsl); with
+//             skips.closed_casters then once more per block with Closed (the culled triangles, for
+//             the receivers that need them), (4) resolve. Nothing is read back, queried, allocated or
 //             thrown: misuse returns a Status.
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
