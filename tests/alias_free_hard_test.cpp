@@ -1,5 +1,6 @@
 // Alias-free hard shadows (sintorn2008 §3): the blocker test against the oracle on adversarial
-// pairs, the GPU pipeline against its CPU twin (bit for bit) and against the exact oracle (0
+// pairs, the GPU pipeline against its CPU twin (bit for bit: the bitwise tier of
+// support/gl_test_support.hpp; on other drivers at most 0.1% of states differ) and against the exact oracle (0
 // mismatches outside reported ties) on every built-in scene and spot.obj with several lights,
 // the skips proven bit-identical, multi-pass list blocks, and bad input. The Fixed-6 light pass's
 // two-pass plan: the casters' geometry stage declares max_vertices 6, casters crossing the light's
@@ -225,7 +226,8 @@ TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions
                         differ += states[i] != cpu[i];
                         shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
                     }
-                    CHECK(differ == 0);
+                    PENUMBRA_CHECK_BITWISE("hard pipeline states GPU == CPU twin (every variant, precision, input)", differ == 0);
+                    CHECK(differ * 1000 <= states.size());
                     CHECK(shadowed > 100);
                     if (precision == penumbra::AfhPrecision::Exact) {
                         if (reference_states.empty()) reference_states = states;
@@ -252,7 +254,7 @@ namespace {
 std::vector<std::pair<std::string, penumbra::scene::Scene>> allScenes() {
     std::vector<std::pair<std::string, penumbra::scene::Scene>> scenes;
     for (const auto& name : penumbra::scene::builtinNames()) scenes.emplace_back(name, penumbra::scene::builtin(name));
-    const std::string dir = PENUMBRA_SHARED_SCENES_DIR;
+    const std::string dir = penumbra::test::sharedScenesDir();
     if (std::filesystem::is_directory(dir)) {
         std::vector<std::string> files;
         for (const auto& e : std::filesystem::directory_iterator(dir)) {
@@ -459,8 +461,10 @@ TEST_CASE("long lists: blocks decided on the GPU give identical results; past ma
             }
             MESSAGE("GPU vs CPU twin: ", order_only, " samples untested on one side only (list order), ",
                     both_tested_differ, " tested on both sides and different");
-            CHECK(both_tested_differ == 0);
-            CHECK(gpu_untested == cpu_untested);
+            PENUMBRA_CHECK_BITWISE("hard pipeline past max_list_blocks: GPU == CPU twin on samples both tested",
+                                   both_tested_differ == 0);
+            PENUMBRA_CHECK_BITWISE("hard pipeline past max_list_blocks: GPU and CPU twin leave as many untested",
+                                   gpu_untested == cpu_untested);
             size_t untested = 0, changed = 0;
             for (size_t i = 0; i < states.size(); ++i) {
                 untested += states[i] == PENUMBRA_AFH_UNTESTED && one_pass[i] != PENUMBRA_AFH_UNTESTED;
@@ -821,7 +825,7 @@ TEST_CASE("Fixed-6 two-pass: casters crossing the light's eye plane give the Exa
         CHECK(c.shadowed > 500);
         // GPU == CPU twin.
         const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.tested(v).data(), f.normals.data(), f.samples(), f.casters());
-        CHECK(two_pass.states == cpu);
+        PENUMBRA_CHECK_BITWISE("hard pipeline Fixed-6 two-pass states GPU == CPU twin", two_pass.states == cpu);
     }
 }
 

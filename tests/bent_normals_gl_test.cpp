@@ -1,6 +1,8 @@
 // bent_normals.glsl on the GPU: bent_normals.comp.glsl's l_bend per vertex and penumbraBentShade /
-// penumbraBentDirect equal the CPU twins bit for bit (llvmpipe: correctly rounded float; on other
-// drivers the per-vertex values may differ in the last bits, the back-face guarantee does not).
+// penumbraBentDirect equal the CPU twins bit for bit (bitwise tier, support/gl_test_support.hpp:
+// llvmpipe rounds float correctly); on any driver they agree within 1e-4 (portable tier: GLSL's
+// division and sqrt are within 3 ulp, FMA contraction is allowed, and these are short chains of
+// values of magnitude <= a few units), the back-face guarantee does not change.
 #include <penumbra/bent_normals.hpp>
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/shader.hpp>
@@ -11,6 +13,8 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -56,14 +60,18 @@ TEST_CASE("GPU: bent_normals.comp.glsl l_bend == bentLight bit for bit (torus kn
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         const std::vector<float> gpu = output.download<float>();
         size_t mismatched = 0, negative = 0;
+        double max_difference = 0.0;
         for (uint32_t v = 0; v < bent.vertex_count; ++v) {
             const float cpu = penumbra::bentLight(bent, v, mesh.positions[v], knot.light.position, radius);
             mismatched += bits(cpu) != bits(gpu[v]);
             negative += cpu < 0.0f;
+            const double d = std::abs(double(gpu[v]) - cpu);
+            max_difference = std::max(max_difference, std::isfinite(d) ? d : 1e30);
         }
         MESSAGE("radius " << radius << ": " << bent.vertex_count << " vertices, " << negative << " with l_bend < 0, "
-                          << mismatched << " GPU != CPU");
-        CHECK(mismatched == 0);
+                          << mismatched << " GPU != CPU, largest difference " << max_difference);
+        PENUMBRA_CHECK_BITWISE("bent normals l_bend GPU == CPU twin bit for bit", mismatched == 0);
+        CHECK(max_difference <= 1e-4);
         CHECK(negative > 0);
     }
 }
@@ -71,7 +79,7 @@ TEST_CASE("GPU: bent_normals.comp.glsl l_bend == bentLight bit for bit (torus kn
 TEST_CASE("GPU: penumbraBentShade / penumbraBentDirect == bentShade / bentDirect bit for bit (up to the sign of 0)") {
     penumbra::test::context();
     penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
-    lib.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders");
+    lib.addDirectory(penumbra::test::testShaderDir());
     const penumbra::gl::Program program = penumbra::gl::buildComputeProgram("bent_normals/shade_test.comp.glsl", {}, lib);
     std::mt19937 rng(penumbra::test::testSeed());
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
@@ -89,6 +97,7 @@ TEST_CASE("GPU: penumbraBentShade / penumbraBentDirect == bentShade / bentDirect
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     const std::vector<glm::vec2> gpu = out.download<glm::vec2>();
     size_t mismatched = 0;
+    double max_difference = 0.0;
     for (size_t i = 0; i < inputs.size(); ++i) {
         const glm::vec4 k = inputs[i];
         const float shade = penumbra::bentShade(k.x, k.y, k.z), direct = penumbra::bentDirect(k.x, k.y, k.z);
@@ -96,9 +105,13 @@ TEST_CASE("GPU: penumbraBentShade / penumbraBentDirect == bentShade / bentDirect
         // lighting can see).
         const bool ok = (bits(gpu[i].x) == bits(shade) || (gpu[i].x == 0.0f && shade == 0.0f)) &&
                         (bits(gpu[i].y) == bits(direct) || (gpu[i].y == 0.0f && direct == 0.0f));
+        const double d = std::max(std::abs(double(gpu[i].x) - shade), std::abs(double(gpu[i].y) - direct));
+        max_difference = std::max(max_difference, std::isfinite(d) ? d : 1e30);
         if (!ok && ++mismatched <= 5)
             MESSAGE("input " << i << " (" << k.x << ", " << k.y << ", " << k.z << "): GPU " << gpu[i].x << ", " << gpu[i].y
                              << " CPU " << shade << ", " << direct);
     }
-    CHECK(mismatched == 0);
+    MESSAGE(mismatched << " GPU != CPU, largest difference " << max_difference);
+    PENUMBRA_CHECK_BITWISE("penumbraBentShade/penumbraBentDirect GPU == CPU twin bit for bit", mismatched == 0);
+    CHECK(max_difference <= 1e-4);
 }

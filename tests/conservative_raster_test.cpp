@@ -610,8 +610,13 @@ void requireClean(const CoverageStats& s, bool expect_prediction = true) {
     CHECK(s.direct_over_six == 0);
     CHECK(s.twin_spill_disagreements == 0);
     if (s.two_pass) {
-        // Every triangle the CPU predicate spills, and no other, went through the spill buffer.
-        CHECK(s.spill_gpu == s.spill_predicted);
+        // Every triangle the CPU predicate spills, and no other, went through the spill buffer (a
+        // float decision: bit for bit where floats round correctly; elsewhere borderline triangles
+        // may go either way, at most 1%, and coverage is checked per pixel above either way).
+        PENUMBRA_CHECK_BITWISE("conservative raster: GPU spills exactly the triangles the CPU predicate spills",
+                               s.spill_gpu == s.spill_predicted);
+        CHECK((s.spill_gpu > s.spill_predicted ? s.spill_gpu - s.spill_predicted : s.spill_predicted - s.spill_gpu) * 100 <=
+              s.spill_predicted + 100);
         CHECK(s.spill_overflow == 0);
     }
     if (expect_prediction) {

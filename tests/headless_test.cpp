@@ -87,3 +87,29 @@ TEST_CASE("an unknown PENUMBRA_GL value is an error, not a silent default") {
     CHECK_THROWS_WITH_AS(HeadlessContext(), doctest::Contains("vulkan"), penumbra::Error);
     if (old) setenv("PENUMBRA_GL", saved.c_str(), 1); else unsetenv("PENUMBRA_GL");
 }
+
+TEST_CASE("PENUMBRA_EGL_DEVICE picks one listed EGL device; an index past the list is an error naming it") {
+    const char* backend = std::getenv("PENUMBRA_GL");
+    if (backend && std::string(backend) == "osmesa") {
+        MESSAGE("skipped: PENUMBRA_EGL_DEVICE applies to the EGL backend only");
+        return;
+    }
+    const char* old = std::getenv("PENUMBRA_EGL_DEVICE");
+    const std::string saved = old ? old : "";
+    setenv("PENUMBRA_EGL_DEVICE", "99", 1);
+    HeadlessOptions egl;
+    egl.backend = Backend::Egl;
+    CHECK_THROWS_WITH_AS(HeadlessContext(egl), doctest::Contains("PENUMBRA_EGL_DEVICE=99"), penumbra::Error);
+    setenv("PENUMBRA_EGL_DEVICE", "0", 1);  // Mesa lists its software device, NVIDIA its GPUs: index 0 exists
+    try {
+        HeadlessContext context(egl);
+        MESSAGE("PENUMBRA_EGL_DEVICE=0: platform ", context.platform(), ", renderer ", context.renderer());
+        CHECK(context.platform().rfind("egl-device", 0) == 0);
+    } catch (const penumbra::Error& e) {
+        // A device may be listed but give no 4.5 core context (e.g. Mesa's DRM-less device list):
+        // then the message must say so, never fall back to another device.
+        MESSAGE("PENUMBRA_EGL_DEVICE=0 gave no context: ", e.what());
+        CHECK(std::string(e.what()).find("egl-device") != std::string::npos);
+    }
+    if (old) setenv("PENUMBRA_EGL_DEVICE", saved.c_str(), 1); else unsetenv("PENUMBRA_EGL_DEVICE");
+}

@@ -1,7 +1,7 @@
 // GLSL twin of the influence region (shaders/penumbra/influence_region/) against the CPU
 // (penumbra/influence_region.hpp): per triangle the kind, the fallback bits and the emitted polygon
-// bit for bit (llvmpipe rounds float operations correctly; on other drivers only the coverage
-// assertions hold), GL's rasterization of it == the CPU's pixel-centre rule away from edges, and no
+// bit for bit (bitwise tier: llvmpipe rounds float operations correctly; elsewhere the vertices
+// agree within 1e-3 texel and the coverage assertions hold), GL's rasterization of it == the CPU's pixel-centre rule away from edges, and no
 // shadowed receiver's texel left uncovered by the GPU (the never-miss property on the GPU, for a
 // subset of the CPU test's cases).
 #include <penumbra/gl/objects.hpp>
@@ -14,6 +14,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -98,6 +99,7 @@ TEST_CASE("GPU: influence regions == the CPU twin bit for bit, GL coverage == th
     Rng rng(penumbra::test::testSeed());
     long compared = 0, polygon_mismatch = 0, kind_mismatch = 0, coverage_missing = 0, coverage_extra = 0, shadowed = 0,
          gpu_misses = 0, whole = 0, hulls = 0;
+    double polygon_max_px = 0.0;  // largest |GPU - CPU| of a polygon vertex, texels
     for (int sides : {4, 6, 8, 12}) {
         for (int cut = 0; cut < 2; ++cut) {
             CAPTURE(sides);
@@ -138,37 +140,44 @@ TEST_CASE("GPU: influence regions == the CPU twin bit for bit, GL coverage == th
                 ++compared;
                 whole += r.kind == penumbra::InfluenceRegionKind::WholeGrid;
                 hulls += r.kind == penumbra::InfluenceRegionKind::Hull;
-                if (rec[0] != uint32_t(r.kind) || rec[1] != r.fallback || rec[2] != uint32_t(r.count)) {
-                    if (++kind_mismatch <= 5)
-                        MESSAGE("triangle ", t, ": GPU kind ", rec[0], " fallback ", rec[1], " count ", rec[2], ", CPU ",
-                                int(r.kind), " ", r.fallback, " ", r.count);
-                    continue;
-                }
-                bool same = true;
-                for (int i = 0; i < r.count; ++i) {
-                    uint32_t bx, by;
-                    std::memcpy(&bx, &r.pixels[i].x, 4);
-                    std::memcpy(&by, &r.pixels[i].y, 4);
-                    same = same && rec[4 + 2 * i] == bx && rec[5 + 2 * i] == by;
-                }
-                if (!same && ++polygon_mismatch <= 5) MESSAGE("triangle ", t, ": polygon bits differ");
-                // Coverage: every texel the CPU rule predicts away from edges is a GPU fragment and
-                // the GPU has no fragment the rule excludes away from edges.
+                // The kind and count decide how the record is read: a triangle whose kind differs (a
+                // driver rounding a threshold the other way) is compared for never-miss alone.
+                const bool kind_same = rec[0] == uint32_t(r.kind) && rec[1] == r.fallback && rec[2] == uint32_t(r.count);
+                if (!kind_same && ++kind_mismatch <= 5)
+                    MESSAGE("triangle ", t, ": GPU kind ", rec[0], " fallback ", rec[1], " count ", rec[2], ", CPU ", int(r.kind),
+                            " ", r.fallback, " ", r.count);
                 const uint32_t* cov = &gpu.coverage[size_t(t) * words];
                 auto gpuCovers = [&](int x, int y) {
                     const size_t i = size_t(y) * setup.width() + x;
                     return (cov[1 + i / 32] >> (i % 32)) & 1u;
                 };
-                const penumbra::HullRaster expected = penumbra::influenceRegionTexels(r, setup, 0.01);
-                std::vector<uint8_t> state(size_t(setup.width()) * setup.height(), 0);
-                for (const auto& p : expected.fragments) {
-                    state[size_t(p.y) * setup.width() + p.x] = 1;
-                    if (!gpuCovers(p.x, p.y)) ++coverage_missing;
+                if (kind_same) {
+                    bool same = true;
+                    for (int i = 0; i < r.count; ++i) {
+                        uint32_t bx, by;
+                        std::memcpy(&bx, &r.pixels[i].x, 4);
+                        std::memcpy(&by, &r.pixels[i].y, 4);
+                        same = same && rec[4 + 2 * i] == bx && rec[5 + 2 * i] == by;
+                        float gx, gy;
+                        std::memcpy(&gx, &rec[4 + 2 * i], 4);
+                        std::memcpy(&gy, &rec[5 + 2 * i], 4);
+                        const double d = std::max(std::abs(double(gx) - r.pixels[i].x), std::abs(double(gy) - r.pixels[i].y));
+                        polygon_max_px = std::max(polygon_max_px, std::isfinite(d) ? d : 1e30);
+                    }
+                    if (!same && ++polygon_mismatch <= 5) MESSAGE("triangle ", t, ": polygon bits differ");
+                    // Coverage: every texel the CPU rule predicts away from edges (0.01 texel) is a GPU
+                    // fragment and the GPU has no fragment the rule excludes away from edges.
+                    const penumbra::HullRaster expected = penumbra::influenceRegionTexels(r, setup, 0.01);
+                    std::vector<uint8_t> state(size_t(setup.width()) * setup.height(), 0);
+                    for (const auto& p : expected.fragments) {
+                        state[size_t(p.y) * setup.width() + p.x] = 1;
+                        if (!gpuCovers(p.x, p.y)) ++coverage_missing;
+                    }
+                    for (const auto& p : expected.uncertain) state[size_t(p.y) * setup.width() + p.x] = 2;
+                    for (int y = 0; y < setup.height(); ++y)
+                        for (int x = 0; x < setup.width(); ++x)
+                            if (gpuCovers(x, y) && state[size_t(y) * setup.width() + x] == 0) ++coverage_extra;
                 }
-                for (const auto& p : expected.uncertain) state[size_t(p.y) * setup.width() + p.x] = 2;
-                for (int y = 0; y < setup.height(); ++y)
-                    for (int x = 0; x < setup.width(); ++x)
-                        if (gpuCovers(x, y) && state[size_t(y) * setup.width() + x] == 0) ++coverage_extra;
                 // Never miss, on the GPU's coverage: shadowed receivers from the light's boundary.
                 const glm::dvec3 la = frame.toLocal(glm::dvec3(a)), lb = frame.toLocal(glm::dvec3(b)),
                                  lc = frame.toLocal(glm::dvec3(c));
@@ -192,9 +201,14 @@ TEST_CASE("GPU: influence regions == the CPU twin bit for bit, GL coverage == th
     MESSAGE(compared, " triangles compared (", hulls, " hulls, ", whole, " whole-grid); kind/count mismatches ", kind_mismatch,
             ", polygon bit mismatches ", polygon_mismatch, "; coverage missing ", coverage_missing, ", extra ", coverage_extra,
             "; ", shadowed, " shadowed receivers, GPU misses ", gpu_misses);
+    MESSAGE("largest polygon vertex difference GPU - CPU: ", polygon_max_px, " texels");
     CHECK(compared == 4 * 2 * 256);
-    CHECK(kind_mismatch == 0);
-    CHECK(polygon_mismatch == 0);
+    PENUMBRA_CHECK_BITWISE("influence region kind/count GPU == CPU twin", kind_mismatch == 0);
+    PENUMBRA_CHECK_BITWISE("influence region polygon GPU == CPU twin bit for bit", polygon_mismatch == 0);
+    // Portable: a kind flip at a threshold is rare (bound: 1%); vertices agree to far below the
+    // 0.01-texel margin of the coverage rule, which is what makes the coverage checks portable.
+    CHECK(kind_mismatch * 100 <= compared);
+    CHECK(polygon_max_px <= 1e-3);
     CHECK(coverage_missing == 0);
     CHECK(coverage_extra == 0);
     CHECK(gpu_misses == 0);

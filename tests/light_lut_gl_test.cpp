@@ -8,7 +8,10 @@
 // errors and the per-call Status of every misuse; a missing hook failing to compile with its name.
 //
 // Bit identity of the lookups needs correctly rounded float +, *, /, sqrt (llvmpipe); the table
-// identity needs IEEE fp64 + and * (llvmpipe and desktop GPUs with fp64). The two-angle lookup
+// identity needs correctly rounded fp64 + and * (GLSL promises no more than single precision for
+// doubles). Both are the bitwise tier (support/gl_test_support.hpp); the portable tier asserts that
+// chunking and moved bindings reproduce the driver's own unchunked table, at most 0.1% of table words
+// and 1% of lookups differ from the twins, and certified + resolve == exact. The two-angle lookup
 // calls acos/atan, whose GLSL precision is unspecified: its cells are compared and the mismatch
 // fraction is printed, and only the exactness of certified + resolve is asserted.
 //
@@ -30,6 +33,7 @@ int g_lut_test_asserts = 0;
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <bitset>
 #include <cmath>
 #include <cstring>
@@ -109,6 +113,13 @@ struct GenCase {
     penumbra::LightLutOptions options;
 };
 
+size_t differingWords(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
+    if (a.size() != b.size()) return std::max(a.size(), b.size());
+    size_t count = 0;
+    for (size_t i = 0; i < a.size(); ++i) count += a[i] != b[i];
+    return count;
+}
+
 void checkIdentical(penumbra::LightLutGenerator& generator, const GenCase& c) {
     INFO(c.name);
     const penumbra::LightLutSetup setup = penumbra::lightLutSetup(c.samples, c.n, c.options);
@@ -116,7 +127,8 @@ void checkIdentical(penumbra::LightLutGenerator& generator, const GenCase& c) {
     const std::vector<uint32_t> gpu = gpuLut(generator, setup);
     const std::string mismatch = firstMismatch(gpu, cpu);
     INFO(mismatch);
-    CHECK(mismatch.empty());
+    PENUMBRA_CHECK_BITWISE("light LUT table GPU == generateLightLut byte for byte", mismatch.empty());
+    CHECK(differingWords(gpu, cpu) * 1000 <= cpu.size());
     if (mismatch.empty()) {
         MESSAGE(c.name, ": ", setup.tableBytes(), " bytes, ", generator.dispatches().size(),
                 " dispatch(es), GPU == CPU byte for byte");
@@ -285,6 +297,8 @@ TEST_CASE("LightLutGenerator: forced chunking (table windows, distance slabs, na
     context();
     const penumbra::LightLutSetup setup = penumbra::lightLutSetup(ballSets(160, 2, 21), 160, lutOptions(32, true));
     const std::vector<uint32_t> cpu = penumbra::generateLightLut(setup);
+    penumbra::LightLutGenerator unchunked;
+    const std::vector<uint32_t> gpu_unchunked = gpuLut(unchunked, setup);
     const uint64_t table_bytes = uint64_t(setup.params.texels_per_table) * 16, slab = 32ull * 32 * 16;
     struct Limits {
         const char* name;
@@ -311,7 +325,8 @@ TEST_CASE("LightLutGenerator: forced chunking (table windows, distance slabs, na
         }
         const std::string mismatch = firstMismatch(gpu, cpu);
         INFO(mismatch);
-        CHECK(mismatch.empty());
+        PENUMBRA_CHECK_BITWISE("light LUT chunked table GPU == generateLightLut byte for byte", mismatch.empty());
+        CHECK(firstMismatch(gpu, gpu_unchunked).empty());  // chunking changes no texel's arithmetic
         MESSAGE(std::string(l.name), ": ", generator.dispatches().size(), " dispatches, identical: ", mismatch.empty());
     }
 }
@@ -326,10 +341,14 @@ TEST_CASE("LightLutGenerator: the default bindings can move; moved-from generato
     bindings.table = 2;
     bindings.uncertain = 0;
     bindings.params = 3;
+    penumbra::LightLutGenerator default_bindings;
+    const std::vector<uint32_t> want = gpuLut(default_bindings, setup);
     penumbra::LightLutGenerator generator(penumbra::ShaderLibrary::embedded(), bindings);
-    CHECK(firstMismatch(gpuLut(generator, setup), penumbra::generateLightLut(setup)).empty());
+    CHECK(firstMismatch(gpuLut(generator, setup), want).empty());
     penumbra::LightLutGenerator moved = std::move(generator);
-    CHECK(firstMismatch(gpuLut(moved, setup), penumbra::generateLightLut(setup)).empty());
+    CHECK(firstMismatch(gpuLut(moved, setup), want).empty());
+    PENUMBRA_CHECK_BITWISE("light LUT table (moved bindings) GPU == generateLightLut byte for byte",
+                           firstMismatch(want, penumbra::generateLightLut(setup)).empty());
     penumbra::gl::Buffer buffer(setup.tableBytes());
     g_lut_test_asserts = 0;
     CHECK(generator.generate(setup, {buffer.id(), 0, buffer.size()}) == Status::NotReserved);  // NOLINT: moved-from
@@ -339,12 +358,12 @@ TEST_CASE("LightLutGenerator: the default bindings can move; moved-from generato
 TEST_CASE("LightLutGenerator: the RGBA32UI 3D texture helper copies one table") {
     context();
     const penumbra::LightLutSetup setup = penumbra::lightLutSetup(ballSets(160, 1, 9), 160, lutOptions(16, true));
-    const std::vector<uint32_t> cpu = penumbra::generateLightLut(setup);
     penumbra::LightLutGenerator generator;
     penumbra::gl::Buffer buffer(setup.tableBytes());
     const penumbra::BufferRange table{buffer.id(), 0, buffer.size()};
     generator.reserve(setup);
     REQUIRE(generator.generate(setup, table) == Status::Ok);
+    const std::vector<uint32_t> cpu = penumbra::readLightLut(setup, table);  // what the helper must copy
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);  // engine state the helper must restore
     for (const bool uncertain : {false, true}) {
         penumbra::gl::Texture texture = penumbra::createLightLutTexture(setup);
@@ -399,15 +418,13 @@ void lookupIdentity(size_t count) {
                 t.combine, ", locate ", t.locate, ", rotate ", t.rotate, "; resolved != exact float ",
                 t.resolved_not_exact, ", != exact double ", t.resolved_not_exact_double, " (", t.bad_planes,
                 " bad planes excluded)");
-        CHECK(t.exact == 0);
-        CHECK(t.rotate == 0);
+        PENUMBRA_CHECK_BITWISE("lookup.glsl exactBehind GPU == CPU twin", t.exact == 0);
+        PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraLutRotate GPU == CPU twin", t.rotate == 0);
+        CHECK(t.exact * 100 <= t.entries);
         if (c.options.mapping == M::Octahedral) {
-            CHECK(t.locate == 0);
-            CHECK(t.behind == 0);
-            CHECK(t.certain == 0);
-            CHECK(t.uncertain == 0);
-            CHECK(t.resolve == 0);
-            CHECK(t.combine == 0);
+            PENUMBRA_CHECK_BITWISE("lookup.glsl locate/lookup/certain/resolve/combine GPU == CPU twins",
+                                   (t.locate | t.behind | t.certain | t.uncertain | t.resolve | t.combine) == 0);
+            for (uint64_t wrong : {t.locate, t.behind, t.certain, t.uncertain, t.resolve, t.combine}) CHECK(wrong * 100 <= t.entries);
         }
         if (c.options.certified) CHECK(t.resolved_not_exact == 0);
     }

@@ -19,7 +19,7 @@
 TEST_CASE("GPU: penumbraLightSampleSet / RotationHash / RotationTurns == the CPU for 64 x 64 pixels x 4 frames") {
     penumbra::test::context();
     penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
-    lib.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders");
+    lib.addDirectory(penumbra::test::testShaderDir());
     const penumbra::gl::Program program = penumbra::gl::buildComputeProgram("light_samples/select_test.comp.glsl", {}, lib);
     const uint32_t width = 64, height = 64, frames = 4;
     struct Case {

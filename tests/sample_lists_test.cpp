@@ -576,7 +576,7 @@ uint32_t checkReplay(const SampleListsSetup& setup, const SampleListsLight& ligh
     SampleListsLight used = light;
     if (build.fit_frustum) used.view_projection = f_replay.view_projection;
     const SampleListsCpu cpu = cpu_build(used);
-    CHECK(penumbra::sampleListsDifference(replayed, cpu) == "");
+    PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(replayed, cpu) == "");
     if (build.statistics) {
         CHECK(penumbra::sampleListStatisticsFromHeader(setup, h_replay) == penumbra::sampleListStatisticsCpu(cpu));
     }
@@ -733,11 +733,11 @@ TEST_CASE("texel borders, frustum, near/far, NaN/Inf, background and back-facing
         CAPTURE(s.positions[id].x);
         CAPTURE(s.positions[id].y);
         CHECK(cpu.sample_texels[id] == expected[id]);
-        CHECK(gpu.sample_texels[id] == expected[id]);
+        PENUMBRA_CHECK_BITWISE("sample lists: GPU texel codes follow the float border rule", gpu.sample_texels[id] == expected[id]);
     }
     checkStructure(setup, cpu, s.positions.data(), nullptr);
     checkStructure(setup, gpu, s.positions.data(), nullptr);
-    CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
     // The CPU twin orders every list by sample id.
     for (uint32_t list = 0; list < setup.lists; ++list) {
         for (uint32_t k = 1; k < cpu.counts[list]; ++k) {
@@ -754,7 +754,7 @@ TEST_CASE("texel borders, frustum, near/far, NaN/Inf, background and back-facing
     CHECK(cpu_all.header.rejected[uint32_t(SampleRejection::NonFinite)] == 3);
     // 2 back-facing + 2 beyond near/far + 1 NaN normal + 1 beyond far and back-facing.
     CHECK(cpu_all.header.accepted == cpu.header.accepted + 6);
-    CHECK(penumbra::sampleListsDifference(gpu_all, cpu_all) == "");
+    PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu_all, cpu_all) == "");
 }
 
 TEST_CASE("GPU lists equal the CPU twin and the invariants on random samples across work-group edges") {
@@ -782,7 +782,7 @@ TEST_CASE("GPU lists equal the CPU twin and the invariants on random samples acr
             const auto oracle = oracleCodes(setup, light, options, samples);
             decided_total += checkStructure(setup, cpu, samples.positions.data(), &oracle);
             checkStructure(setup, gpu, samples.positions.data(), &oracle);
-            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
             accepted_total += cpu.header.accepted;
         }
     }
@@ -826,7 +826,7 @@ TEST_CASE("GPU and CPU agree bit for bit on samples within a few ULPs of texel b
             const SampleListsOptions options;
             const SampleListsCpu cpu = cpuBuild(setup, light, s, options);
             const SampleListsCpu gpu = gpuBuild(setup, light, s, options);
-            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
             checkStructure(setup, gpu, s.positions.data(), nullptr);
             // The test has teeth: many samples sit exactly on a border in float arithmetic.
             const penumbra::SampleListsParams params = penumbra::sampleListsParams(setup, light, options);
@@ -890,7 +890,7 @@ TEST_CASE("depth-texture input: GPU equals the CPU twin") {
                                  lists.ids(), options) == Status::Ok);
             const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
             gl::checkErrors("depth-input build");
-            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
             checkStructure(setup, gpu, nullptr, nullptr);
             // Reconstructed positions: the twin's are within float error of a double unprojection.
             size_t far_off = 0;
@@ -962,12 +962,12 @@ TEST_CASE("all samples in one texel: a list of 2^20 samples, walked from a fragm
     const SampleListsCpu gpu = gpuBuild(setup, light, s, options, &lists);
     CHECK(cpu.counts[20 * 32 + 11] == n);
     CHECK(gpu.counts[20 * 32 + 11] == n);
-    CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+    PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
     checkStructure(setup, gpu, s.positions.data(), nullptr);
     const auto stats = gpuStatistics(setup, lists);
     CHECK(stats.max_list_length == n);
     CHECK(stats.occupied_lists == 1);
-    CHECK(stats == penumbra::sampleListStatisticsCpu(cpu));
+    CHECK(stats == penumbra::sampleListStatisticsCpu(gpu));
     walkLists(setup, light, options, lists, gpu, 1);
 }
 
@@ -1113,18 +1113,18 @@ TEST_CASE("§4.3 light-frustum fit: GPU equals CPU, every accepted sample stays 
             penumbra::fitLightFrustumCpu(setup, light, s.positions.data(), s.normals.data(), options);
         REQUIRE(gpu.valid);
         REQUIRE(cpu.valid);
-        CHECK(std::memcmp(&gpu.keys.fit_min_u, &cpu.keys.fit_min_u, 8 * 4) == 0);
+        PENUMBRA_CHECK_BITWISE("light-frustum fit: GPU keys == CPU twin", std::memcmp(&gpu.keys.fit_min_u, &cpu.keys.fit_min_u, 8 * 4) == 0);
         // The frustum the GPU resolved for itself equals the twin's, every word (llvmpipe rounds
         // fp64 correctly; see fit_resolve.comp.glsl for other drivers).
-        CHECK(std::memcmp(&gpu.frustum, &cpu.frustum, sizeof(penumbra::SampleListsFrustum)) == 0);
-        CHECK(std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
-        CHECK(std::memcmp(&gpu.crop, &cpu.crop, sizeof(glm::mat4)) == 0);
-        CHECK(gpu.far_distance == cpu.far_distance);
+        PENUMBRA_CHECK_BITWISE("light-frustum fit: GPU frustum == CPU twin", std::memcmp(&gpu.frustum, &cpu.frustum, sizeof(penumbra::SampleListsFrustum)) == 0);
+        PENUMBRA_CHECK_BITWISE("light-frustum fit: GPU view-projection == CPU twin", std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
+        PENUMBRA_CHECK_BITWISE("light-frustum fit: GPU crop == CPU twin", std::memcmp(&gpu.crop, &cpu.crop, sizeof(glm::mat4)) == 0);
+        PENUMBRA_CHECK_BITWISE("light-frustum fit: GPU far distance == CPU twin", gpu.far_distance == cpu.far_distance);
         {
             // The lists of that same build used the GPU's fitted frustum, with no read-back between.
             SampleListsLight fitted_by_gpu = light;
             fitted_by_gpu.view_projection = gpu.view_projection;
-            CHECK(penumbra::sampleListsDifference(penumbra::downloadSampleLists(setup, fit_lists.ids()),
+            PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(penumbra::downloadSampleLists(setup, fit_lists.ids()),
                                                   cpuBuild(setup, fitted_by_gpu, s, options)) == "");
         }
         // Closed form: the box and the farthest distance from the samples in double precision.
@@ -1152,7 +1152,7 @@ TEST_CASE("§4.3 light-frustum fit: GPU equals CPU, every accepted sample stays 
         fitted.view_projection = gpu.view_projection;
         const SampleListsCpu cpu_fitted = cpuBuild(setup, fitted, s, options);
         const SampleListsCpu gpu_fitted = gpuBuild(setup, fitted, s, options);
-        CHECK(penumbra::sampleListsDifference(gpu_fitted, cpu_fitted) == "");
+        PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu_fitted, cpu_fitted) == "");
         CHECK(cpu_fitted.header.accepted == original.header.accepted);
         size_t lost = 0;
         for (uint32_t id = 0; id < n; ++id) {
@@ -1195,7 +1195,7 @@ TEST_CASE("§4.3 light-frustum fit: GPU equals CPU, every accepted sample stays 
     const auto cpu = penumbra::fitLightFrustumCpu(setup, pointLight(), view, depth.data(), normals.data());
     REQUIRE(cpu.valid);
     CHECK(cpu.samples == 1);
-    CHECK(std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
+    PENUMBRA_CHECK_BITWISE("light-frustum fit (depth input): GPU view-projection == CPU twin", std::memcmp(&gpu.view_projection, &cpu.view_projection, sizeof(glm::mat4)) == 0);
     SampleListsLight fitted = pointLight();
     fitted.view_projection = cpu.view_projection;
     const SampleListsCpu lists = penumbra::buildSampleListsCpu(setup, fitted, view, depth.data(), normals.data());
@@ -1219,13 +1219,13 @@ TEST_CASE("Fig. 9 statistics: GPU equals CPU equals the closed form") {
         GpuLists lists(setup);
         const SampleListsCpu gpu = gpuBuild(setup, pointLight(), samples, {}, &lists);
         const SampleListsCpu cpu = cpuBuild(setup, pointLight(), samples, {});
-        REQUIRE(penumbra::sampleListsDifference(gpu, cpu) == "");
+        PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
         // Poison the statistics words: the pass must initialise them itself.
         const uint32_t poison = kPoison;
         glClearNamedBufferSubData(lists.header.id(), GL_R32UI, 4 * PENUMBRA_SAMPLE_LISTS_HEADER_STATISTICS_WORD, 16,
                                   GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
         const penumbra::SampleListStatistics on_gpu = gpuStatistics(setup, lists);
-        const penumbra::SampleListStatistics on_cpu = penumbra::sampleListStatisticsCpu(cpu);
+        const penumbra::SampleListStatistics on_cpu = penumbra::sampleListStatisticsCpu(gpu);  // of the GPU's lists: any driver
         CHECK(on_gpu == on_cpu);
         // Closed form from the downloaded counts and per-sample codes.
         uint32_t occupied = 0, longest = 0;
@@ -1269,7 +1269,7 @@ TEST_CASE("stress: large random builds equal the CPU twin" * doctest::test_suite
             const Samples samples = randomSamples(rng, setup.sample_count);
             const SampleListsCpu cpu = cpuBuild(setup, light, samples, {});
             const SampleListsCpu gpu = gpuBuild(setup, light, samples, {});
-            CHECK(penumbra::sampleListsDifference(gpu, cpu) == "");
+            PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpu) == "");
             checkStructure(setup, gpu, samples.positions.data(), nullptr);
         }
     }
@@ -1289,7 +1289,7 @@ TEST_CASE("a fresh builder needs reserve(); a moved builder builds the same stru
     penumbra::SampleListBuilder moved(std::move(b));
     CHECK(moved.build(setup, pointLight(), bufferInput(positions, normals), lists.ids()) == Status::Ok);
     const SampleListsCpu gpu = penumbra::downloadSampleLists(setup, lists.ids());
-    CHECK(penumbra::sampleListsDifference(gpu, cpuBuild(setup, pointLight(), samples, {})) == "");
+    PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(gpu, cpuBuild(setup, pointLight(), samples, {})) == "");
 }
 
 TEST_CASE("planSampleLists: pass order, grids, bindings, programs and constants without GL") {

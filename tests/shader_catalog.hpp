@@ -10,6 +10,8 @@
 
 #include <penumbra/shader_source.hpp>
 
+#include "support/source_paths.hpp"
+
 #include <filesystem>
 #include <set>
 #include <sstream>
@@ -39,7 +41,7 @@ inline bool isEntryKey(const std::string& key) {
 /// The embedded library plus tests/shaders (test-only entries may include shipped snippets).
 inline ShaderLibrary catalogLibrary() {
     ShaderLibrary lib = ShaderLibrary::embedded();
-    const std::string test_dir = std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders";
+    const std::string test_dir = penumbra::test::testShaderDir();
     if (std::filesystem::is_directory(test_dir)) lib.addDirectory(test_dir);
     return lib;
 }

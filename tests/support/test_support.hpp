@@ -9,6 +9,7 @@
 #define PENUMBRA_TESTS_SUPPORT_TEST_SUPPORT_HPP
 
 #include "penumbra/error.hpp"
+#include "support/source_paths.hpp"
 
 #include <doctest/doctest.h>
 

@@ -16,7 +16,9 @@
 // unset means EGL, falling back to OSMesa when no EGL display gives a 4.5 core context. An
 // explicit backend (argument or environment) never falls back: tests labelled for a backend must
 // really run on it. EGL tries EGL_EXT_platform_device hardware devices first (NVIDIA's driver
-// offers no surfaceless platform), then Mesa's surfaceless platform, then software devices.
+// offers no surfaceless platform), then Mesa's surfaceless platform, then software devices;
+// PENUMBRA_EGL_DEVICE=i picks the i-th listed device alone (several GPUs; glvnd's
+// __EGL_VENDOR_LIBRARY_FILENAMES picks the vendor library).
 #ifndef PENUMBRA_GL_HEADLESS_HPP
 #define PENUMBRA_GL_HEADLESS_HPP
 
@@ -26,6 +28,7 @@
 #include <EGL/eglext.h>
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -350,6 +353,25 @@ private:
             errors += std::string(errors.empty() ? "" : "; ") + name + ": " + why;
             return false;
         };
+        // PENUMBRA_EGL_DEVICE=i: only the i-th device eglQueryDevicesEXT lists (hardware or
+        // software), for machines with several GPUs; no fallback to another device or platform.
+        if (const char* pick = std::getenv("PENUMBRA_EGL_DEVICE"); pick && *pick) {
+            char* end = nullptr;
+            const long index = std::strtol(pick, &end, 10);
+            std::vector<EGLDeviceEXT> all;
+            if (query_devices) {
+                EGLDeviceEXT devices[16];
+                EGLint count = 0;
+                if (query_devices(16, devices, &count)) all.assign(devices, devices + count);
+            }
+            if (*end != '\0' || index < 0 || static_cast<size_t>(index) >= all.size()) {
+                return "PENUMBRA_EGL_DEVICE=" + std::string(pick) + " names no EGL device (" + std::to_string(all.size()) +
+                       " listed)";
+            }
+            const bool is_software = std::find(software.begin(), software.end(), all[size_t(index)]) != software.end();
+            if (attempt(EGL_PLATFORM_DEVICE_EXT, all[size_t(index)], is_software ? "egl-device-software" : "egl-device")) return {};
+            return errors;
+        }
         for (EGLDeviceEXT device : hardware) {
             if (attempt(EGL_PLATFORM_DEVICE_EXT, device, "egl-device")) return {};
         }
