@@ -134,7 +134,7 @@ std::vector<SceneSpec> sceneSpecs() {
     std::vector<SceneSpec> specs;
     for (const std::string& name : penumbra::scene::builtinNames()) specs.push_back({name, ""});
 #ifdef PENUMBRA_SHARED_SCENES_DIR
-    const std::filesystem::path dir = PENUMBRA_SHARED_SCENES_DIR;
+    const std::filesystem::path dir = penumbra::test::sharedScenesDir();
     std::error_code ec;
     if (std::filesystem::is_directory(dir, ec)) {
         std::vector<std::filesystem::path> files;

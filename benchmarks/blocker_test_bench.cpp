@@ -96,7 +96,7 @@ void BM_BlockerTestFilteredVsFp64(benchmark::State& state) {
     const std::string scene = kBlockerScenes[state.range(0)];
     const BlockerPairs pairs = blockerPairs(scene, penumbra::bench::smokeRun() ? 20000 : 1000000);
     penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
-    lib.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders");
+    lib.addDirectory(penumbra::test::testShaderDir());
     const std::string key = "alias_free_hard/blocker_filter_test.comp.glsl";
     penumbra::gl::Program check = penumbra::gl::buildComputeProgram(key, {{"PENUMBRA_AFH_FILTER_TEST_MODE", "0"}}, lib);
     penumbra::gl::Program filtered =
@@ -170,6 +170,7 @@ void BM_BlockerTestFilteredVsFp64(benchmark::State& state) {
     }
     state.counters["simd32_fallback"] = steps ? double(double_steps) / double(steps) : 0.0;
     state.SetLabel(scene);
+    penumbra::bench::reportTimer(state);  // which clock timed this entry
     state.counters["pairs"] = double(slots);
     state.counters["ms_filtered"] = 1e3 * filtered_s / std::max(runs, 1);
     state.counters["ms_fp64"] = 1e3 * fp64_s / std::max(runs, 1);

@@ -241,6 +241,7 @@ void BM_ConservativeRaster(benchmark::State& state, Mode mode, double near_fract
 
     const double n = static_cast<double>(count);
     state.counters["triangles_per_second"] = benchmark::Counter(n, benchmark::Counter::kIsIterationInvariantRate);
+    penumbra::bench::reportTimer(state);  // which clock timed this entry
     state.counters["fragments_per_triangle"] = errors.fragments / n;
     state.counters["vertices_per_triangle"] = errors.vertices / n;
     state.counters["err_overcoverage"] = errors.extra / std::max(errors.required, 1.0);

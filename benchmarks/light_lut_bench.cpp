@@ -185,7 +185,7 @@ const penumbra::gl::Program& lookupKernel(int mode) {
     auto it = programs.find(mode);
     if (it == programs.end()) {
         penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
-        lib.addDirectory(std::string(PENUMBRA_SOURCE_DIR) + "/tests/shaders");
+        lib.addDirectory(penumbra::test::testShaderDir());
         it = programs.emplace(mode, penumbra::gl::buildComputeProgram("light_lut/lookup_test.comp.glsl",
                                                                       {{"PENUMBRA_LUT_TEST_MODE", std::to_string(mode)}}, lib))
                  .first;

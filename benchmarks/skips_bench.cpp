@@ -127,7 +127,7 @@ struct SceneSpec {
 std::vector<SceneSpec> sceneSpecs() {
     std::vector<SceneSpec> specs = {{"torus_knot", ""}, {"columns", ""}};
 #ifdef PENUMBRA_SHARED_SCENES_DIR
-    specs.push_back({"spot", (std::filesystem::path(PENUMBRA_SHARED_SCENES_DIR) / "spot.obj").string()});
+    specs.push_back({"spot", (std::filesystem::path(penumbra::test::sharedScenesDir()) / "spot.obj").string()});
 #else
     specs.push_back({"spot", "spot.obj"});  // not found: the entry says so
 #endif
