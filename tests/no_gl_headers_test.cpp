@@ -7,6 +7,7 @@
 #include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
 #include <penumbra/light_samples.hpp>
+#include <penumbra/penumbra_casting.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/pipelines/sample_based_soft.hpp>
 #include <penumbra/reference/compare.hpp>
@@ -71,6 +72,19 @@ TEST_CASE("cpu: the GL-free headers plan, validate and run their CPU twins witho
     const penumbra::InfluenceRegion region = penumbra::influenceRegion(vertices[0], vertices[1], vertices[2], influence_setup);
     CHECK(region.kind == penumbra::InfluenceRegionKind::Hull);
     CHECK(penumbra::influenceRegionCoversTexel(region, 4, 4));
+    // Penumbra casting (laine2005) on the CPU: the caster over the first sample blocks part of the
+    // sphere light, the same bits as the oracle.
+    penumbra::LightSampleOptions few;
+    few.count = 32;
+    few.sets = 1;
+    const penumbra::LightSampleSets sphere_sets = penumbra::makeLightSampleSets(sphere, few);
+    penumbra::PenumbraCaster caster({glm::dvec3(0, 0, 0)}, sphere, sphere_sets);
+    caster.addTriangle(glm::dvec3(vertices[0]), glm::dvec3(vertices[1]), glm::dvec3(vertices[2]));
+    const penumbra::PenumbraCastingResult cast = caster.finish();
+    const penumbra::reference::VisibilityResult truth =
+        oracle.evaluate({glm::dvec3(0, 0, 0)}, std::vector<glm::dvec3>(sphere_sets.world.begin(), sphere_sets.world.end()));
+    CHECK(cast.blocked == truth.blocked);
+    CHECK(cast.visibleFraction(0) < 1.0);
     // Status is plain C++ too.
     CHECK(std::string(penumbra::statusName(penumbra::Status::RangeTooSmall)) == "range too small");
 }

@@ -1,0 +1,577 @@
+// penumbra_casting.hpp (laine2005 hierarchical penumbra casting) against the oracle: on every
+// built-in scene and the shared OBJ scenes, with planar (disk, rectangle) and volumetric (sphere,
+// ellipsoid) lights and K sample sets, the blocked bits equal the oracle's on every pair it does
+// not call a tie (ties are counted, and the tie bits are compared too). Every optimisation switched
+// off alone, other thread counts and batch sizes give the same bits; on-demand masks stay below
+// R * N / 8; degenerate input, a point light, cancellation. Receivers lie on the scenes' surfaces.
+#include "penumbra/penumbra_casting.hpp"
+#include "penumbra/reference/visibility.hpp"
+#include "penumbra/scene/obj.hpp"
+#include "penumbra/scene/scene.hpp"
+#include "support/source_paths.hpp"
+#include "support/test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+using glm::dvec3;
+using penumbra::test::contains;
+using penumbra::test::errorOf;
+
+namespace {
+
+bool stressRun() { return std::getenv("PENUMBRA_STRESS") != nullptr; }
+
+struct Mesh {
+    std::vector<dvec3> positions;
+    std::vector<uint32_t> indices;
+    size_t triangles() const { return indices.size() / 3; }
+};
+
+struct Case {
+    std::string name;
+    penumbra::scene::Scene scene;
+    Mesh mesh;
+};
+
+Mesh toMesh(const penumbra::scene::Mesh& m) {
+    Mesh out;
+    out.positions.assign(m.positions.begin(), m.positions.end());
+    out.indices = m.indices;
+    return out;
+}
+
+std::vector<Case> allScenes() {
+    std::vector<Case> cases;
+    for (const auto& name : penumbra::scene::builtinNames()) {
+        penumbra::scene::Scene scene = penumbra::scene::builtin(name);
+        Mesh mesh = toMesh(scene.merged());
+        cases.push_back({name, std::move(scene), std::move(mesh)});
+    }
+    const std::string dir = penumbra::test::sharedScenesDir();
+    if (std::filesystem::is_directory(dir)) {
+        std::vector<std::string> files;
+        for (const auto& e : std::filesystem::directory_iterator(dir))
+            if (e.path().extension() == ".obj") files.push_back(e.path().string());
+        std::sort(files.begin(), files.end());
+        for (const auto& file : files) {
+            penumbra::scene::Scene scene = penumbra::scene::loadObj(file);
+            Mesh mesh = toMesh(scene.merged());
+            cases.push_back({std::filesystem::path(file).filename().string(), std::move(scene), std::move(mesh)});
+        }
+    } else {
+        MESSAGE("skipping the shared OBJ scenes: ", dir, " is absent");
+    }
+    return cases;
+}
+
+/// `count` points on random triangles of the mesh (uniform per triangle index).
+std::vector<dvec3> surfacePoints(const Mesh& mesh, size_t count, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<size_t> pick(0, mesh.triangles() - 1);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<dvec3> points;
+    while (points.size() < count) {
+        const size_t t = pick(rng);
+        const dvec3 a = mesh.positions[mesh.indices[3 * t]], b = mesh.positions[mesh.indices[3 * t + 1]],
+                    c = mesh.positions[mesh.indices[3 * t + 2]];
+        double u = unit(rng), v = unit(rng);
+        if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+        points.push_back(a + u * (b - a) + v * (c - a));
+    }
+    return points;
+}
+
+/// The scene's light as each of the four shapes (planar ones face the scene's centre).
+std::vector<std::pair<std::string, penumbra::Light>> lightsOf(const penumbra::scene::Scene& scene) {
+    const dvec3 position(scene.light.position);
+    const double radius = std::max(0.05, double(scene.light.radius));
+    const penumbra::scene::Bounds bounds = scene.bounds();
+    const dvec3 centre = 0.5 * (dvec3(bounds.min) + dvec3(bounds.max));
+    const dvec3 down = centre - position;
+    std::vector<std::pair<std::string, penumbra::Light>> lights;
+    penumbra::Light disk;
+    disk.shape = penumbra::LightShape::Disk;
+    disk.center = position;
+    disk.axis_z = down;
+    disk.axis_x = glm::cross(down, dvec3(0.3, 0.2, 1.0));
+    disk.size = dvec3(1.5 * radius);
+    lights.emplace_back("disk", disk);
+    penumbra::Light rect = disk;
+    rect.shape = penumbra::LightShape::Rectangle;
+    rect.size = dvec3(1.6 * radius, 0.7 * radius, 1.0);
+    lights.emplace_back("rectangle", rect);
+    penumbra::Light sphere;
+    sphere.shape = penumbra::LightShape::Sphere;
+    sphere.center = position;
+    sphere.size = dvec3(radius);
+    lights.emplace_back("sphere", sphere);
+    penumbra::Light ellipsoid = sphere;
+    ellipsoid.shape = penumbra::LightShape::Ellipsoid;
+    ellipsoid.axis_z = dvec3(0.2, 1.0, 0.3);
+    ellipsoid.axis_x = dvec3(1.0, 0.0, 0.4);
+    ellipsoid.size = dvec3(1.4 * radius, 0.6 * radius, 0.9 * radius);
+    lights.emplace_back("ellipsoid", ellipsoid);
+    return lights;
+}
+
+/// The oracle with each receiver's own set, scattered back into receiver order.
+penumbra::reference::VisibilityResult oracleTruth(const penumbra::reference::VisibilityOracle& oracle,
+                                                  const std::vector<dvec3>& receivers,
+                                                  const std::vector<uint32_t>& receiver_sets,
+                                                  const penumbra::LightSampleSets& sets,
+                                                  const penumbra::reference::VisibilityOptions& options = {}) {
+    const uint32_t n = sets.count();
+    penumbra::reference::VisibilityResult truth;
+    truth.receivers = receivers.size();
+    truth.samples = n;
+    truth.words_per_receiver = (n + 31) / 32;
+    truth.blocked.assign(receivers.size() * truth.words_per_receiver, 0u);
+    truth.ties.assign(receivers.size() * truth.words_per_receiver, 0u);
+    for (uint32_t set = 0; set < sets.sets(); ++set) {
+        std::vector<dvec3> group;
+        std::vector<size_t> ids;
+        for (size_t r = 0; r < receivers.size(); ++r)
+            if (receiver_sets[r] == set) {
+                group.push_back(receivers[r]);
+                ids.push_back(r);
+            }
+        if (group.empty()) continue;
+        const penumbra::reference::VisibilityResult part =
+            oracle.evaluate(group, std::vector<dvec3>(sets.worldSet(set), sets.worldSet(set) + n), options);
+        for (size_t g = 0; g < ids.size(); ++g)
+            for (uint32_t w = 0; w < truth.words_per_receiver; ++w) {
+                truth.blocked[ids[g] * truth.words_per_receiver + w] = part.blocked[g * part.words_per_receiver + w];
+                truth.ties[ids[g] * truth.words_per_receiver + w] = part.ties[g * part.words_per_receiver + w];
+            }
+        truth.tie_count += part.tie_count;
+    }
+    return truth;
+}
+
+struct Tally {
+    uint64_t pairs = 0, blocked = 0, ties = 0, mismatched = 0, tie_mismatched = 0;
+};
+
+Tally compare(const penumbra::PenumbraCastingResult& result, const penumbra::reference::VisibilityResult& truth) {
+    Tally t;
+    REQUIRE(result.blocked.size() == truth.blocked.size());
+    REQUIRE(result.words_per_receiver == truth.words_per_receiver);
+    for (size_t r = 0; r < truth.receivers; ++r)
+        for (uint32_t s = 0; s < truth.samples; ++s) {
+            ++t.pairs;
+            t.tie_mismatched += result.isTie(r, s) != truth.isTie(r, s);
+            if (truth.isTie(r, s)) {
+                ++t.ties;
+                continue;
+            }
+            t.blocked += truth.isBlocked(r, s);
+            t.mismatched += result.isBlocked(r, s) != truth.isBlocked(r, s);
+        }
+    return t;
+}
+
+penumbra::PenumbraCastingResult cast(const Mesh& mesh, const std::vector<dvec3>& receivers, const penumbra::Light& light,
+                                     const penumbra::LightSampleSets& sets, const penumbra::PenumbraCastingOptions& options = {},
+                                     const std::vector<uint32_t>& receiver_sets = {}) {
+    size_t t = 0;
+    return penumbra::penumbraCast(
+        receivers, light, sets,
+        [&](dvec3& a, dvec3& b, dvec3& c) {
+            if (t == mesh.triangles()) return false;
+            a = mesh.positions[mesh.indices[3 * t]];
+            b = mesh.positions[mesh.indices[3 * t + 1]];
+            c = mesh.positions[mesh.indices[3 * t + 2]];
+            ++t;
+            return true;
+        },
+        options, receiver_sets);
+}
+
+std::vector<uint32_t> defaultSets(size_t receivers, uint32_t k) {
+    std::vector<uint32_t> sets(receivers);
+    for (size_t r = 0; r < receivers; ++r) sets[r] = uint32_t(r % k);
+    return sets;
+}
+
+void equalsOracle(size_t receiver_count, uint32_t n, uint32_t k) {
+    const uint32_t seed = penumbra::test::testSeed();
+    Tally total;
+    for (const Case& c : allScenes()) {
+        const penumbra::reference::VisibilityOracle oracle(c.mesh.positions, c.mesh.indices);
+        const std::vector<dvec3> receivers = surfacePoints(c.mesh, receiver_count, seed + uint32_t(c.mesh.triangles()));
+        for (const auto& [light_name, light] : lightsOf(c.scene)) {
+            INFO(c.name << " " << light_name << " N=" << n << " K=" << k);
+            penumbra::LightSampleOptions sample_options;
+            sample_options.count = n;
+            sample_options.sets = k;
+            sample_options.seed = seed;
+            const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+            const penumbra::PenumbraCastingResult result = cast(c.mesh, receivers, light, sets);
+            const penumbra::reference::VisibilityResult truth =
+                oracleTruth(oracle, receivers, result.receiver_sets, sets);
+            CHECK(result.receiver_sets == defaultSets(receivers.size(), k));
+            const Tally t = compare(result, truth);
+            CHECK(t.mismatched == 0);
+            CHECK(t.tie_mismatched == 0);
+            CHECK(result.stats.ties == truth.tie_count);
+            CHECK(result.stats.triangles == c.mesh.triangles());
+            MESSAGE(c.name, " ", light_name, ": ", c.mesh.triangles(), " triangles, ", t.pairs, " pairs, ", t.blocked,
+                    " blocked, ", t.ties, " oracle ties (excluded), ", t.mismatched, " mismatched; pairs tested ",
+                    result.stats.pairs_tested, ", hard-culled ", result.stats.pairs_hard_culled, ", nodes ",
+                    result.stats.nodes_visited, ", near-light triangles ", result.stats.triangles_near_light);
+            total.pairs += t.pairs;
+            total.ties += t.ties;
+            total.mismatched += t.mismatched;
+            total.tie_mismatched += t.tie_mismatched;
+        }
+    }
+    MESSAGE("all scenes and lights: ", total.pairs, " pairs, ", total.ties, " oracle ties excluded, ", total.mismatched,
+            " blocked mismatches, ", total.tie_mismatched, " tie-bit mismatches");
+}
+
+}  // namespace
+
+TEST_CASE("penumbra casting equals the oracle on every scene, planar and volumetric lights, K sets") {
+    equalsOracle(240, 64, 4);
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("penumbra casting equals the oracle: 3000 receivers, N = 256, K = 8") { equalsOracle(3000, 256, 8); }
+}
+
+TEST_CASE("every optimisation off alone, thread counts, batch sizes: identical bits") {
+    const uint32_t seed = penumbra::test::testSeed(1);
+    struct Setup {
+        std::string name;
+        penumbra::scene::Scene scene;
+        size_t light_index;
+    };
+    std::vector<Setup> setups;
+    setups.push_back({"torus_knot", penumbra::scene::torusKnot(24), 0});  // disk
+    setups.push_back({"hairball", penumbra::scene::hairball(3000, 5), 2});  // sphere
+    for (const Setup& setup : setups) {
+        const Mesh mesh = toMesh(setup.scene.merged());
+        const auto lights = lightsOf(setup.scene);
+        const penumbra::Light& light = lights[setup.light_index].second;
+        penumbra::LightSampleOptions sample_options;
+        sample_options.count = 128;
+        sample_options.sets = 8;
+        const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+        const std::vector<dvec3> receivers = surfacePoints(mesh, 1500, seed);
+        penumbra::PenumbraCastingOptions base;
+        base.threads = 1;
+        const penumbra::PenumbraCastingResult reference = cast(mesh, receivers, light, sets, base);
+        const penumbra::reference::VisibilityOracle oracle(mesh.positions, mesh.indices);
+        const Tally t = compare(reference, oracleTruth(oracle, receivers, reference.receiver_sets, sets));
+        CHECK(t.mismatched == 0);
+        CHECK(t.tie_mismatched == 0);
+
+        std::vector<std::pair<std::string, penumbra::PenumbraCastingOptions>> variants;
+        auto add = [&](const std::string& name, auto&& change) {
+            penumbra::PenumbraCastingOptions o = base;
+            change(o);
+            variants.emplace_back(name, o);
+        };
+        add("umbra_bits off", [](auto& o) { o.umbra_bits = false; });
+        add("active_planes off", [](auto& o) { o.active_planes = false; });
+        add("lazy_volumes off", [](auto& o) { o.lazy_volumes = false; });
+        add("on_demand_masks off", [](auto& o) { o.on_demand_masks = false; });
+        add("area_sort off", [](auto& o) { o.area_sort = false; });
+        add("2 threads", [](auto& o) { o.threads = 2; });
+        add("3 threads", [](auto& o) { o.threads = 3; });
+        add("batches of 1000", [](auto& o) { o.batch_triangles = 1000; });
+        add("leaf 4, group 8", [](auto& o) {
+            o.leaf_size = 4;
+            o.group_size = 8;
+        });
+        add("everything off", [](auto& o) {
+            o.umbra_bits = o.active_planes = o.lazy_volumes = o.on_demand_masks = o.area_sort = false;
+        });
+        for (const auto& [name, options] : variants) {
+            INFO(setup.name << ": " << name);
+            const penumbra::PenumbraCastingResult r = cast(mesh, receivers, light, sets, options);
+            CHECK(r.blocked == reference.blocked);
+            CHECK(r.ties == reference.ties);
+            if (name == "2 threads" || name == "3 threads") {
+                // Work counters do not depend on the thread count either.
+                CHECK(r.stats.nodes_visited == reference.stats.nodes_visited);
+                CHECK(r.stats.pairs_tested == reference.stats.pairs_tested);
+                CHECK(r.stats.umbra_skips == reference.stats.umbra_skips);
+            }
+            MESSAGE(setup.name, " ", name, ": pairs tested ", r.stats.pairs_tested, " (all on: ",
+                    reference.stats.pairs_tested, "), nodes ", r.stats.nodes_visited, ", umbra skips ", r.stats.umbra_skips,
+                    ", volumes V_k ", r.stats.group_volumes_built, " V_i ", r.stats.hard_volumes_built, ", rebuilds ",
+                    r.stats.rebuilds);
+        }
+    }
+}
+
+TEST_CASE("on-demand masks: peak bytes below R * N / 8 with many unshadowed receivers") {
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const Mesh mesh = toMesh(scene.merged());
+    const penumbra::Light light = lightsOf(scene)[2].second;  // sphere
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 256;
+    sample_options.sets = 8;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    const std::vector<dvec3> receivers = surfacePoints(mesh, 4000, penumbra::test::testSeed(2));
+    penumbra::PenumbraCastingOptions options;
+    const penumbra::PenumbraCastingResult on = cast(mesh, receivers, light, sets, options);
+    options.on_demand_masks = false;
+    const penumbra::PenumbraCastingResult off = cast(mesh, receivers, light, sets, options);
+    CHECK(on.stats.mask_bytes_full == receivers.size() * 256 / 8);
+    CHECK(on.stats.mask_bytes_peak < on.stats.mask_bytes_full);
+    CHECK(off.stats.mask_bytes_peak >= off.stats.mask_bytes_full);
+    CHECK(on.blocked == off.blocked);
+    size_t lit = 0, umbra = 0;
+    for (size_t r = 0; r < receivers.size(); ++r) {
+        lit += on.visibleFraction(r) == 1.0;
+        umbra += on.visibleFraction(r) == 0.0;
+    }
+    MESSAGE("masks: on demand peak ", on.stats.mask_bytes_peak, " bytes, up front peak ", off.stats.mask_bytes_peak,
+            " bytes, R * N / 8 = ", on.stats.mask_bytes_full, " (", lit, " of ", receivers.size(), " receivers fully lit, ",
+            umbra, " in full umbra)");
+}
+
+TEST_CASE("degenerate blockers: zero area dropped and counted, NaN / Inf rejected naming the value") {
+    penumbra::Light light;
+    light.center = dvec3(0.0, 3.0, 0.0);
+    light.axis_z = dvec3(0.0, -1.0, 0.0);
+    light.size = dvec3(0.5);
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {64, 2});
+    std::vector<dvec3> receivers;
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) receivers.push_back(dvec3(-1.0 + 0.2 * i, 0.0, -1.0 + 0.2 * j));
+    penumbra::PenumbraCaster caster(receivers, light, sets);
+    caster.addTriangle(dvec3(-1, 1, -1), dvec3(1, 1, -1), dvec3(0, 1, -1));        // collinear
+    caster.addTriangle(dvec3(-1, 1, -1), dvec3(-1, 1, -1), dvec3(1, 1, 1));        // repeated vertex
+    caster.addTriangle(dvec3(0.5, 1, 0.5), dvec3(0.5, 1, 0.5), dvec3(0.5, 1, 0.5));  // a point
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::string nan_error = errorOf([&] { caster.addTriangle(dvec3(0, 1, 0), dvec3(nan, 1, 0), dvec3(0, 1, 1)); });
+    CHECK(contains(nan_error, "vertex b of triangle 3"));
+    CHECK(contains(nan_error, "nan"));
+    const std::string inf_error = errorOf([&] { caster.addTriangle(dvec3(0, 1, 0), dvec3(1, 1, 0), dvec3(0, inf, 1)); });
+    CHECK(contains(inf_error, "vertex c of triangle 3"));
+    CHECK(contains(inf_error, "inf"));
+    // Still usable: a real blocker after the rejected ones.
+    caster.addTriangle(dvec3(-0.3, 1, -0.3), dvec3(0.3, 1, -0.3), dvec3(0, 1, 0.3));
+    const penumbra::PenumbraCastingResult result = caster.finish();
+    CHECK(result.stats.triangles == 4);
+    CHECK(result.stats.triangles_degenerate == 3);
+    const std::vector<dvec3> positions = {dvec3(-0.3, 1, -0.3), dvec3(0.3, 1, -0.3), dvec3(0, 1, 0.3)};
+    const penumbra::reference::VisibilityOracle oracle(positions, {0, 1, 2});
+    const Tally t = compare(result, oracleTruth(oracle, receivers, result.receiver_sets, sets));
+    CHECK(t.mismatched == 0);
+    CHECK(t.blocked > 0);
+    CHECK(contains(errorOf([&] { caster.addTriangle(dvec3(0), dvec3(1, 0, 0), dvec3(0, 1, 0)); }), "spent"));
+}
+
+TEST_CASE("receivers exactly on a blocker's plane are not blocked by it (coplanar rule, as the oracle)") {
+    penumbra::Light light;
+    light.shape = penumbra::LightShape::Rectangle;
+    light.center = dvec3(0.25, 2.0, 0.0);
+    light.axis_z = dvec3(-0.2, -1.0, 0.1);
+    light.size = dvec3(0.4, 0.3, 1.0);
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {128, 4});
+    // A tilted floor of two triangles with dyadic vertices, receivers on it (inside, on edges,
+    // on the shared diagonal, at vertices), and below it.
+    const dvec3 a(-1, 0.5, -1), b(1, 0.25, -1), c(1, 0.75, 1), d(-1, 1.0, 1);
+    const std::vector<dvec3> positions = {a, b, c, d};
+    const std::vector<uint32_t> indices = {0, 1, 2, 0, 2, 3};
+    std::vector<dvec3> receivers = {a, b, c, d, 0.5 * (a + c), 0.5 * (a + b), 0.25 * a + 0.75 * c};
+    std::mt19937 rng(penumbra::test::testSeed(3));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < 200; ++i) {
+        const double u = unit(rng), v = unit(rng);
+        receivers.push_back(a + u * (b - a) + v * (d - a));
+        receivers.push_back(u + v <= 1.0 ? a + u * (b - a) + v * (c - a) : a + (1 - u) * (c - a) + (1 - v) * (d - a));
+    }
+    const size_t on_plane = receivers.size();
+    for (int i = 0; i < 50; ++i) receivers.push_back(dvec3(unit(rng) - 0.5, -0.5, unit(rng) - 0.5));
+    Mesh mesh{positions, indices};
+    const penumbra::PenumbraCastingResult result = cast(mesh, receivers, light, sets);
+    const penumbra::reference::VisibilityOracle oracle(positions, indices);
+    const Tally t = compare(result, oracleTruth(oracle, receivers, result.receiver_sets, sets));
+    CHECK(t.mismatched == 0);
+    CHECK(t.tie_mismatched == 0);
+    // The floor is a parallelogram (a + c == b + d): every receiver on it is unblocked by both of
+    // its triangles; everything below is in full umbra.
+    for (size_t r = 0; r < on_plane; ++r) CHECK(result.visibleFraction(r) == 1.0);
+    for (size_t r = on_plane; r < receivers.size(); ++r) CHECK(result.visibleFraction(r) == 0.0);
+}
+
+TEST_CASE("a light of zero area: coincident samples act as a point light, as the oracle with that point") {
+    penumbra::Light light;
+    light.center = dvec3(0.3, 2.5, -0.2);
+    light.size = dvec3(0.2);
+    penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {32, 2});
+    for (dvec3& s : sets.world) s = light.center;  // makeLightSampleSets rejects a zero radius
+    const penumbra::scene::Scene scene = penumbra::scene::columns(4);
+    const Mesh mesh = toMesh(scene.merged());
+    const std::vector<dvec3> receivers = surfacePoints(mesh, 2000, penumbra::test::testSeed(4));
+    const penumbra::PenumbraCastingResult result = cast(mesh, receivers, light, sets);
+    const penumbra::reference::VisibilityOracle oracle(mesh.positions, mesh.indices);
+    const penumbra::reference::VisibilityResult point = oracle.evaluate(receivers, {light.center});
+    size_t shadowed = 0, ties = 0;
+    for (size_t r = 0; r < receivers.size(); ++r) {
+        const uint32_t expected = point.isTie(r, 0) ? 0u : (point.isBlocked(r, 0) ? 0xffffffffu : 0u);
+        if (point.isTie(r, 0)) {
+            ++ties;
+            CHECK(result.ties[r] == 0xffffffffu);
+            continue;
+        }
+        CHECK(result.blocked[r] == expected);
+        CHECK(result.ties[r] == 0u);
+        shadowed += expected != 0;
+    }
+    CHECK(shadowed > 0);
+    MESSAGE("point light: ", shadowed, " of ", receivers.size(), " receivers in shadow, ", ties, " ties");
+}
+
+TEST_CASE("empty receivers, no triangles, bad arguments") {
+    penumbra::Light light;
+    light.center = dvec3(0, 2, 0);
+    light.size = dvec3(0.3);
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {32, 3});
+    const Mesh quad{{dvec3(-1, 1, -1), dvec3(1, 1, -1), dvec3(1, 1, 1), dvec3(-1, 1, 1)}, {0, 1, 2, 0, 2, 3}};
+
+    const penumbra::PenumbraCastingResult empty = cast(quad, {}, light, sets);
+    CHECK(empty.blocked.empty());
+    CHECK(empty.receivers() == 0);
+    CHECK(empty.stats.triangles == 2);
+    CHECK(empty.stats.mask_bytes_full == 0);
+
+    const std::vector<dvec3> receivers = {dvec3(0, 0, 0), dvec3(5, 0, 5), dvec3(0, 3, 0)};
+    const penumbra::PenumbraCastingResult none = cast(Mesh{}, receivers, light, sets);
+    CHECK(none.blocked == std::vector<uint32_t>(3, 0u));
+    CHECK(none.ties == std::vector<uint32_t>(3, 0u));
+    for (size_t r = 0; r < 3; ++r) CHECK(none.visibleFraction(r) == 1.0);
+    CHECK(none.stats.mask_bytes_peak == 0);
+
+    const penumbra::PenumbraCastingResult lit = cast(quad, receivers, light, sets, {}, {2, 1, 0});
+    CHECK(lit.receiver_sets == std::vector<uint32_t>{2, 1, 0});
+    CHECK(lit.visibleFraction(0) == 0.0);
+    CHECK(lit.visibleFraction(1) == 1.0);
+    CHECK(lit.visibleFraction(2) == 1.0);
+
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, {}, {0, 1}); }), "receiver_sets has 2"));
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, {}, {0, 3, 1}); }), "receiver_sets[1] = 3"));
+    penumbra::PenumbraCastingOptions bad;
+    bad.leaf_size = 0;
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, bad); }), "leaf_size"));
+    bad = {};
+    bad.group_size = 0;
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, bad); }), "group_size"));
+    bad = {};
+    bad.oracle.tie_epsilon = -1.0;
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, bad); }), "tie_epsilon"));
+    const std::vector<dvec3> nan_receiver = {dvec3(0, std::numeric_limits<double>::quiet_NaN(), 0)};
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(nan_receiver, light, sets); }), "receivers[0]"));
+    penumbra::LightSampleSets short_sets = sets;
+    short_sets.world.pop_back();
+    CHECK(contains(errorOf([&] { penumbra::PenumbraCaster(receivers, light, short_sets); }), "sets.world holds 95"));
+}
+
+TEST_CASE("cancellation through the progress callback") {
+    const penumbra::scene::Scene scene = penumbra::scene::hairball(20000, 2);
+    const Mesh mesh = toMesh(scene.merged());
+    const penumbra::Light light = lightsOf(scene)[2].second;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {64, 4});
+    const std::vector<dvec3> receivers = surfacePoints(mesh, 3000, penumbra::test::testSeed(5));
+
+    std::vector<double> fractions;
+    penumbra::PenumbraCastingOptions options;
+    options.batch_triangles = 5000;
+    options.progress = [&](double f) {
+        fractions.push_back(f);
+        return true;
+    };
+    const penumbra::PenumbraCastingResult full = cast(mesh, receivers, light, sets, options);
+    CHECK_FALSE(full.stats.cancelled);
+    REQUIRE(!fractions.empty());
+    CHECK(fractions.back() == 1.0);
+    for (double f : fractions) CHECK((f >= 0.0 && f <= 1.0));
+
+    size_t calls = 0, pulled = 0;
+    options.progress = [&](double) { return ++calls < 3; };
+    size_t t = 0;
+    const penumbra::PenumbraCastingResult cut = penumbra::penumbraCast(
+        receivers, light, sets,
+        [&](dvec3& a, dvec3& b, dvec3& c) {
+            if (t == mesh.triangles()) return false;
+            a = mesh.positions[mesh.indices[3 * t]];
+            b = mesh.positions[mesh.indices[3 * t + 1]];
+            c = mesh.positions[mesh.indices[3 * t + 2]];
+            ++t;
+            ++pulled;
+            return true;
+        },
+        options);
+    CHECK(cut.stats.cancelled);
+    CHECK(calls == 3);
+    CHECK(pulled < mesh.triangles());  // penumbraCast stops pulling triangles
+    CHECK(cut.stats.pairs_tested < full.stats.pairs_tested);
+    MESSAGE("cancelled after ", pulled, " of ", mesh.triangles(), " triangles: ", cut.stats.pairs_tested, " of ",
+            full.stats.pairs_tested, " pair tests done");
+}
+
+TEST_CASE("speed: penumbra casting vs VisibilityOracle::evaluate, torus knot, primary-ray receivers") {
+    const penumbra::scene::Scene scene = penumbra::scene::builtin("torus_knot");
+    const Mesh mesh = toMesh(scene.merged());
+    const penumbra::reference::VisibilityOracle oracle(mesh.positions, mesh.indices);
+    const uint32_t width = stressRun() ? 640 : 320, height = stressRun() ? 480 : 240;
+    const glm::dmat4 view_projection =
+        glm::dmat4(scene.camera.projection(float(width) / float(height))) * glm::dmat4(scene.camera.view());
+    const glm::dmat4 inverse = glm::inverse(view_projection);
+    std::vector<dvec3> receivers;
+    std::vector<uint32_t> receiver_sets;
+    const uint32_t k = 8;
+    for (uint32_t y = 0; y < height; ++y)
+        for (uint32_t x = 0; x < width; ++x) {
+            const double ndc_x = (x + 0.5) / width * 2.0 - 1.0, ndc_y = (y + 0.5) / height * 2.0 - 1.0;
+            const glm::dvec4 near = inverse * glm::dvec4(ndc_x, ndc_y, -1.0, 1.0);
+            const glm::dvec4 far = inverse * glm::dvec4(ndc_x, ndc_y, 1.0, 1.0);
+            const dvec3 origin = dvec3(near) / near.w;
+            const dvec3 direction = dvec3(far) / far.w - origin;
+            const penumbra::reference::Hit hit = oracle.closestHit(origin, direction, 0.0, 1.0);
+            if (!hit.hit) continue;
+            receivers.push_back(origin + hit.t * direction);
+            receiver_sets.push_back(penumbra::lightSampleSet(x, y, 0, k));  // laine2005 §3.4 per pixel
+        }
+    const penumbra::Light light = lightsOf(scene)[0].second;  // disk
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 256;
+    sample_options.sets = k;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+
+    const auto t0 = std::chrono::steady_clock::now();
+    const penumbra::PenumbraCastingResult result = cast(mesh, receivers, light, sets, {}, receiver_sets);
+    const auto t1 = std::chrono::steady_clock::now();
+    const penumbra::reference::VisibilityResult truth = oracleTruth(oracle, receivers, receiver_sets, sets);
+    const auto t2 = std::chrono::steady_clock::now();
+    const Tally t = compare(result, truth);
+    CHECK(t.mismatched == 0);
+    CHECK(t.tie_mismatched == 0);
+    const double cast_s = std::chrono::duration<double>(t1 - t0).count();
+    const double oracle_s = std::chrono::duration<double>(t2 - t1).count();
+    MESSAGE("torus knot ", width, "x", height, " (", receivers.size(), " receivers), N = 256, K = ", k, ", ",
+            mesh.triangles(), " triangles, ", std::thread::hardware_concurrency(), " threads: penumbra casting ", cast_s,
+            " s, oracle evaluate ", oracle_s, " s (", oracle_s / cast_s, "x); pairs tested ", result.stats.pairs_tested,
+            ", masks peak ", result.stats.mask_bytes_peak, " of ", result.stats.mask_bytes_full, " bytes, rebuilds ",
+            result.stats.rebuilds, ", ties ", t.ties);
+}
