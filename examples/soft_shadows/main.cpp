@@ -3,7 +3,7 @@
 //
 //   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
-//                [--mode reference|soft|hard] [--reference] [--out FILE.png] [--json] [--no-ground]
+//                [--mode reference|soft|hard|hpc] [--reference] [--out FILE.png] [--json] [--no-ground]
 //                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--rotations R] [--grid G]
 //
 // Modes
@@ -17,6 +17,11 @@
 //       writes <out>_reference.png (the oracle's image) and <out>_error.png (|error| heat map).
 //       --frames F runs the pipeline F times, every pixel with a fresh selection word each frame,
 //       and writes the running average (JSON temporal.*: RMSE against an oracle image per frame).
+//   hpc: hierarchical penumbra casting on the CPU (penumbra/penumbra_casting.hpp, laine2005): the
+//       same primary-ray view samples as reference mode, a spherical light with K = --sets (8)
+//       sets of N samples chosen per pixel (lightSampleSet), every triangle streamed once;
+//       --reference compares every bit with the oracle on the same light samples (JSON
+//       reference.mismatched_bits, total_bits, ties).
 //   hard: the GPU alias-free hard-shadow pipeline (penumbra/pipelines/alias_free_hard.hpp,
 //       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
 //       --reference adds the oracle's verdict for the same samples and light point to the JSON
@@ -39,6 +44,7 @@
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
 #include <penumbra/light_samples.hpp>
+#include <penumbra/penumbra_casting.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
@@ -147,24 +153,25 @@ struct ModeFlag {
     bool reference;  // used by --mode reference
     bool hard;       // used by --mode hard
     bool soft;       // used by --mode soft
+    bool hpc;        // used by --mode hpc
     const char* why_not;
 };
 // --reference in hard mode checks the GPU against the oracle at the light's centre only, so it
 // uses neither the light samples nor the radius.
 const ModeFlag kModeFlags[] = {
-    {"--samples", true, false, true, "hard shadows use one light point, the light's centre"},
-    {"--light-radius", true, false, true, "hard shadows use one light point, the light's centre"},
-    {"--reference", false, true, true, "reference mode is the oracle already"},
-    {"--view-samples", false, true, true, "reference mode traces exact primary rays on the CPU"},
-    {"--frames", true, false, true, "hard shadows use one light point: there is nothing to accumulate"},
-    {"--frames-reference", true, false, true, "hard shadows use one light point: there is nothing to accumulate"},
-    {"--lut", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
-    {"--lut-res", false, false, true, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
-    {"--sets", false, false, true, "only the GPU soft-shadow pipeline chooses light-sample sets per pixel"},
-    {"--rotations", false, false, true, "only the GPU soft-shadow pipeline rotates light samples per pixel"},
-    {"--grid", false, false, true, "only the GPU soft-shadow pipeline has a separate light grid"},
-    {"--skips", false, true, true, "the oracle does every test"},
-    {"--check-skips", false, true, true, "the oracle does every test"},
+    {"--samples", true, false, true, true, "hard shadows use one light point, the light's centre"},
+    {"--light-radius", true, false, true, true, "hard shadows use one light point, the light's centre"},
+    {"--reference", false, true, true, true, "reference mode is the oracle already"},
+    {"--view-samples", false, true, true, false, "reference and hpc modes trace exact primary rays on the CPU"},
+    {"--frames", true, false, true, false, "hard shadows use one light point: there is nothing to accumulate; hpc renders one frame"},
+    {"--frames-reference", true, false, true, false, "hard shadows use one light point: there is nothing to accumulate; hpc renders one frame"},
+    {"--lut", false, false, true, false, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
+    {"--lut-res", false, false, true, false, "only the GPU soft-shadow pipeline looks light samples up in a LUT"},
+    {"--sets", false, false, true, true, "only the soft and hpc modes choose light-sample sets per pixel"},
+    {"--rotations", false, false, true, false, "only the GPU soft-shadow pipeline rotates light samples per pixel"},
+    {"--grid", false, false, true, false, "only the GPU soft-shadow pipeline has a separate light grid"},
+    {"--skips", false, true, true, false, "the oracle does every test; penumbra casting has no skip switches here"},
+    {"--check-skips", false, true, true, false, "the oracle does every test; penumbra casting has no skip switches here"},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -181,10 +188,11 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_option("--width", raw.width, "image width, 1..16384")->type_name("W")->capture_default_str();
     app.add_option("--height", raw.height, "image height, 1..16384")->type_name("H")->capture_default_str();
     app.add_option("--mode", a.mode,
-                   "reference: oracle soft shadows on the CPU; soft: GPU sample-based soft shadows; hard: GPU alias-free "
+                   "reference: oracle soft shadows on the CPU; soft: GPU sample-based soft shadows; hpc: hierarchical penumbra "
+                   "casting on the CPU; hard: GPU alias-free "
                    "hard shadows")
         ->type_name("MODE")
-        ->check(CLI::IsMember({"reference", "soft", "hard"}))
+        ->check(CLI::IsMember({"reference", "soft", "hard", "hpc"}))
         ->capture_default_str();
     app.add_flag("--reference", a.reference,
                  "hard and soft modes: compare with the oracle on the same view samples (and light samples) (JSON: "
@@ -306,20 +314,20 @@ void checkOutPath(const std::string& out) {
 }
 
 void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
-    const bool hard = a.mode == "hard", soft = a.mode == "soft";
+    const bool hard = a.mode == "hard", soft = a.mode == "soft", hpc = a.mode == "hpc";
     a.ground = !raw.no_ground;
     for (const ModeFlag& f : kModeFlags) {
-        if (app.count(f.flag) > 0 && !(hard ? f.hard : soft ? f.soft : f.reference))
+        if (app.count(f.flag) > 0 && !(hard ? f.hard : soft ? f.soft : hpc ? f.hpc : f.reference))
             usageError(f.flag, " is not used by --mode ", a.mode, " (", f.why_not, ")");
     }
-    const std::string samples = app.count("--samples") > 0 ? raw.samples : soft ? "128" : "64";
+    const std::string samples = app.count("--samples") > 0 ? raw.samples : soft || hpc ? "128" : "64";
     a.samples = parseCount(samples, "--samples", 1, 1u << 16);
-    if (soft && (a.samples < 32 || a.samples > 1024 || a.samples % 32 != 0))
-        usageError("--mode soft draws light-sample sets (penumbra/light_samples.hpp): --samples must be a multiple of 32 "
-                   "in [32, 1024], got '", samples, "'");
+    if ((soft || hpc) && (a.samples < 32 || a.samples > 1024 || a.samples % 32 != 0))
+        usageError("--mode ", a.mode, " draws light-sample sets (penumbra/light_samples.hpp): --samples must be a multiple "
+                   "of 32 in [32, 1024], got '", samples, "'");
     a.lut_res = parseCount(raw.lut_res, "--lut-res", 16, 256);
     if (a.lut_res % 2 != 0) usageError("--lut-res must be even, got '", raw.lut_res, "'");
-    a.sets = parseCount(raw.sets, "--sets", 1, 64);
+    a.sets = parseCount(app.count("--sets") > 0 ? raw.sets : hpc ? "8" : raw.sets, "--sets", 1, 64);  // laine2005 §3.4: 8
     a.grid = parseCount(raw.grid, "--grid", 16, 4096);
     a.rotations = parseCount(raw.rotations, "--rotations", 1, 256);
     a.width = parseCount(raw.width, "--width", 1, 16384);
@@ -447,6 +455,13 @@ MemoryEstimate estimateMemory(const Args& args, size_t triangles) {
                                                          16.0 * (args.lut == "exact" ? 2.0 : 1.0));
         }
         if (args.reference) m.parts.emplace_back("oracle masks (blocked + ties)", (24.0 + 2.0 * 4.0 * words) * pixels);
+    } else if (args.mode == "hpc") {
+        // Penumbra casting: receivers in double and their BVH (~ 64 B), the masks (blocked and
+        // ties; on demand, counted in full here), the oracle's masks with --reference.
+        const double words = std::ceil(double(args.samples) / 32.0);
+        m.parts.emplace_back("view samples and receiver hierarchy", (8.0 + 24.0 + 4.0 + 24.0 + 24.0 + 64.0) * pixels);
+        m.parts.emplace_back("penumbra casting masks", 2.0 * 4.0 * words * pixels);
+        if (args.reference) m.parts.emplace_back("oracle masks (blocked + ties)", 2.0 * 4.0 * words * pixels);
     } else {
         const double words = std::ceil(double(args.samples) / 32.0);
         m.parts.emplace_back("view samples", (8.0 + 24.0 + 4.0 + 24.0 + 24.0) * pixels);
@@ -1421,22 +1436,27 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
 }
 
 // --mode reference: soft shadows from the oracle, every (view sample, light sample) pair.
-int runReference(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
-                 const MergedScene& merged, const glm::dvec3& light_pos, double light_radius, double load_ms,
-                 std::chrono::steady_clock::time_point t_start) {
-    const std::vector<glm::dvec3> light_samples =
-        penumbra::reference::sphereLightSamples(light_pos, light_radius, args.samples, 1);
+/// The CPU renderers' view samples: one primary ray per pixel through the oracle (double), the
+/// hit point, its shading normal and triangle; receivers are the hit points in pixel order.
+struct PrimaryHits {
+    std::vector<int64_t> pixel_sample;  ///< per pixel: index into receivers, -1 for background
+    std::vector<glm::dvec3> hit_point, hit_normal;
+    std::vector<uint32_t> hit_triangle;
+    std::vector<glm::dvec3> receivers;
+    std::vector<uint32_t> receiver_pixel;  ///< per receiver: its pixel (row 0 at the top)
+};
 
-    // ---- view samples: one primary ray per pixel ----
-    auto t0 = std::chrono::steady_clock::now();
+PrimaryHits primaryHits(const Args& args, const penumbra::scene::Scene& scene,
+                        const penumbra::reference::VisibilityOracle& oracle, const MergedScene& merged) {
     const uint32_t w = args.width, h = args.height;
     const glm::dmat4 inv_view_proj =
         glm::inverse(glm::dmat4(scene.camera.projection(float(w) / float(h))) * glm::dmat4(scene.camera.view()));
     const size_t pixels = size_t(w) * h;
-    std::vector<int64_t> pixel_sample(pixels, -1);
-    std::vector<glm::dvec3> hit_normal(pixels);
-    std::vector<uint32_t> hit_triangle(pixels);
-    std::vector<glm::dvec3> hit_point(pixels);
+    PrimaryHits hits;
+    hits.pixel_sample.assign(pixels, -1);
+    hits.hit_normal.resize(pixels);
+    hits.hit_triangle.resize(pixels);
+    hits.hit_point.resize(pixels);
     const glm::dvec3 eye(scene.camera.eye);
     {
         Progress progress("primary rays", pixels);
@@ -1457,19 +1477,193 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
                 }
                 n = glm::normalize(n);
                 if (glm::dot(n, dir) > 0) n = -n;  // open meshes: shade the side we see
-                hit_point[i] = eye + hit.t * dir;
-                hit_normal[i] = n;
-                hit_triangle[i] = hit.triangle;
-                pixel_sample[i] = 0;
+                hits.hit_point[i] = eye + hit.t * dir;
+                hits.hit_normal[i] = n;
+                hits.hit_triangle[i] = hit.triangle;
+                hits.pixel_sample[i] = 0;
             });
         });
     }
-    std::vector<glm::dvec3> receivers;
-    for (size_t i = 0; i < pixel_sample.size(); ++i) {
-        if (pixel_sample[i] < 0) continue;
-        pixel_sample[i] = static_cast<int64_t>(receivers.size());
-        receivers.push_back(hit_point[i]);
+    for (size_t i = 0; i < hits.pixel_sample.size(); ++i) {
+        if (hits.pixel_sample[i] < 0) continue;
+        hits.pixel_sample[i] = static_cast<int64_t>(hits.receivers.size());
+        hits.receivers.push_back(hits.hit_point[i]);
+        hits.receiver_pixel.push_back(static_cast<uint32_t>(i));
     }
+    return hits;
+}
+
+/// Direct light (bent or Phong) times each receiver's visible fraction, sRGB, written to args.out
+/// (and the Phong/bent comparison when asked). Returns the sum of the visible fractions.
+double shadeAndWrite(const Args& args, const MergedScene& merged, const glm::dvec3& light_pos, const PrimaryHits& hits,
+                     const std::vector<double>& visible) {
+    const size_t pixels = hits.pixel_sample.size();
+    const DirectShading direct(merged, light_pos);
+    penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
+    for (auto& image : images) {
+        image.width = args.width;
+        image.height = args.height;
+        image.pixels.assign(pixels * 3, 0);
+    }
+    const glm::dvec3 albedo[2] = {{0.75, 0.75, 0.72}, {0.85, 0.45, 0.2}};
+    const glm::dvec3 sky(0.08, 0.09, 0.12);
+    double lit_sum = 0;
+    for (size_t i = 0; i < pixels; ++i) {
+        glm::dvec3 c[2] = {sky, sky};
+        if (hits.pixel_sample[i] >= 0) {
+            const size_t r = static_cast<size_t>(hits.pixel_sample[i]);
+            const double vis = visible[r];
+            lit_sum += vis;
+            const glm::dvec3 l = glm::normalize(light_pos - hits.hit_point[i]);
+            for (int bent = 0; bent < 2; ++bent) {
+                const double light =
+                    direct.direct(bent == 1, hits.hit_triangle[i], hits.hit_point[i], hits.hit_normal[i], l);
+                c[bent] = albedo[merged.material[hits.hit_triangle[i]]] * (0.12 + 0.88 * light * vis);
+            }
+        }
+        for (int b = 0; b < 2; ++b)
+            for (int k = 0; k < 3; ++k) images[b].pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[b][k]));
+    }
+    penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
+    if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
+    return lit_sum;
+}
+
+int runHpc(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+           const MergedScene& merged, const glm::dvec3& light_pos, double light_radius, double load_ms,
+           std::chrono::steady_clock::time_point t_start) {
+    auto t0 = std::chrono::steady_clock::now();
+    const PrimaryHits hits = primaryHits(args, scene, oracle, merged);
+    const std::vector<glm::dvec3>& receivers = hits.receivers;
+    const double primary_ms = msSince(t0);
+
+    // ---- the light: a sphere, K sets of N samples, set per pixel (laine2005 §3.4) ----
+    penumbra::Light light;
+    light.center = light_pos;
+    light.size = glm::dvec3(light_radius);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = args.samples;
+    sample_options.sets = args.sets;
+    sample_options.seed = 1;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    std::vector<uint32_t> receiver_sets(receivers.size());
+    for (size_t r = 0; r < receivers.size(); ++r) {
+        const uint32_t pixel = hits.receiver_pixel[r];
+        receiver_sets[r] = penumbra::lightSampleSet(pixel % args.width, pixel / args.width, 0, args.sets);
+    }
+
+    // ---- penumbra casting: every triangle streamed once, no scene hierarchy ----
+    t0 = std::chrono::steady_clock::now();
+    penumbra::PenumbraCastingOptions options;
+    auto last_progress = std::chrono::steady_clock::now();
+    options.progress = [&last_progress, t0](double fraction) {  // every 3 s at most, on stderr
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_progress >= std::chrono::seconds(3)) {
+            last_progress = now;
+            std::fprintf(stderr, "soft_shadows: penumbra casting %5.1f%% (%.0f s)\n", 100.0 * fraction, msSince(t0) / 1000.0);
+        }
+        return true;
+    };
+    size_t next = 0;
+    const penumbra::PenumbraCastingResult result = penumbra::penumbraCast(
+        receivers, light, sets,
+        [&](glm::dvec3& a, glm::dvec3& b, glm::dvec3& c) {
+            if (next + 3 > merged.indices.size()) return false;
+            a = merged.positions[merged.indices[next]];
+            b = merged.positions[merged.indices[next + 1]];
+            c = merged.positions[merged.indices[next + 2]];
+            next += 3;
+            return true;
+        },
+        options, receiver_sets);
+    const double casting_ms = msSince(t0);
+    std::vector<double> visible(receivers.size());
+    for (size_t r = 0; r < receivers.size(); ++r) visible[r] = result.visibleFraction(r);
+
+    // ---- --reference: the oracle on the same receivers and each receiver's own sample set ----
+    Json reference_json;
+    double reference_ms = 0.0;
+    if (args.reference) {
+        t0 = std::chrono::steady_clock::now();
+        uint64_t mismatched = 0, ties = 0, total = 0;
+        const size_t words = result.words_per_receiver;
+        for (uint32_t set = 0; set < sets.sets(); ++set) {
+            std::vector<size_t> members;
+            std::vector<glm::dvec3> points;
+            for (size_t r = 0; r < receivers.size(); ++r) {
+                if (receiver_sets[r] != set) continue;
+                members.push_back(r);
+                points.push_back(receivers[r]);
+            }
+            if (members.empty()) continue;
+            const std::vector<glm::dvec3> samples(sets.worldSet(set), sets.worldSet(set) + sets.count());
+            const std::string what = "oracle (set " + std::to_string(set + 1) + " of " + std::to_string(sets.sets()) + ")";
+            const penumbra::reference::VisibilityResult truth = evaluateWithProgress(oracle, points, samples, {}, what.c_str());
+            for (size_t k = 0; k < members.size(); ++k) {
+                for (size_t w = 0; w < words; ++w) {
+                    const uint32_t tie = truth.ties[k * truth.words_per_receiver + w];
+                    const uint32_t want = truth.blocked[k * truth.words_per_receiver + w];
+                    mismatched += uint64_t(__builtin_popcount((result.blocked[members[k] * words + w] ^ want) & ~tie));
+                }
+            }
+            ties += truth.tie_count;
+            total += uint64_t(members.size()) * sets.count();
+        }
+        reference_json = {{"mismatched_bits", mismatched}, {"total_bits", total}, {"ties", ties}};
+        reference_ms = msSince(t0);
+    }
+
+    t0 = std::chrono::steady_clock::now();
+    const double lit_sum = shadeAndWrite(args, merged, light_pos, hits, visible);
+    const double shade_ms = msSince(t0);
+    const double total_ms = msSince(t_start);
+    const penumbra::PenumbraCastingStats& st = result.stats;
+    if (args.json) {
+        Json j = reportHead(args, "hpc");
+        j["width"] = args.width;
+        j["height"] = args.height;
+        j["triangles"] = oracle.triangleCount();
+        j["view_samples"] = receivers.size();
+        j["light_samples"] = sets.count();
+        j["sets"] = sets.sets();
+        j["light"] = {{"position", vec3Json(light_pos)}, {"radius", light_radius}};
+        j["mean_visible_fraction"] = receivers.empty() ? 0.0 : lit_sum / double(receivers.size());
+        j["hpc"] = {{"triangles_streamed", st.triangles},
+                    {"triangles_degenerate", st.triangles_degenerate},
+                    {"pairs_tested", st.pairs_tested},
+                    {"nodes_visited", st.nodes_visited},
+                    {"umbra_skips", st.umbra_skips},
+                    {"mask_bytes_peak", st.mask_bytes_peak},
+                    {"mask_bytes_full", st.mask_bytes_full}};
+        if (args.reference) j["reference"] = reference_json;
+        j["timings_ms"] = {{"load", load_ms},           {"view_samples", primary_ms}, {"penumbra_casting", casting_ms},
+                           {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", total_ms}};
+        j["out"] = args.out;
+        if (args.compare_shading) j["shading_compare"] = shadingComparePath(args.out);
+        printReport(j);
+    } else {
+        std::printf("%s: %zu triangles, %zu view samples x %u light samples (%u sets), penumbra casting %.1f ms -> %s\n",
+                    args.scene.c_str(), oracle.triangleCount(), receivers.size(), sets.count(), sets.sets(), casting_ms,
+                    args.out.c_str());
+        if (args.reference)
+            std::printf("reference: %s of %s bits differ from the oracle (%s ties)\n", reference_json["mismatched_bits"].dump().c_str(),
+                        reference_json["total_bits"].dump().c_str(), reference_json["ties"].dump().c_str());
+    }
+    return 0;
+}
+
+int runReference(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+                 const MergedScene& merged, const glm::dvec3& light_pos, double light_radius, double load_ms,
+                 std::chrono::steady_clock::time_point t_start) {
+    const std::vector<glm::dvec3> light_samples =
+        penumbra::reference::sphereLightSamples(light_pos, light_radius, args.samples, 1);
+
+    // ---- view samples: one primary ray per pixel ----
+    auto t0 = std::chrono::steady_clock::now();
+    const uint32_t w = args.width, h = args.height;
+    const PrimaryHits hits = primaryHits(args, scene, oracle, merged);
+    const std::vector<glm::dvec3>& receivers = hits.receivers;
+    const std::vector<int64_t>& pixel_sample = hits.pixel_sample;
     const double primary_ms = msSince(t0);
 
     // ---- visibility: the exact oracle, every (view sample, light sample) pair ----
@@ -1539,33 +1733,7 @@ int runReference(const Args& args, const penumbra::scene::Scene& scene, const pe
 
     // ---- shade: direct light (bent or Phong) with the sampled visibility, sRGB out ----
     t0 = std::chrono::steady_clock::now();
-    const DirectShading direct(merged, light_pos);
-    penumbra::scene::ImageRgb8 images[2];  // [0] Phong, [1] bent
-    for (auto& image : images) {
-        image.width = w;
-        image.height = h;
-        image.pixels.assign(pixels * 3, 0);
-    }
-    const glm::dvec3 albedo[2] = {{0.75, 0.75, 0.72}, {0.85, 0.45, 0.2}};
-    const glm::dvec3 sky(0.08, 0.09, 0.12);
-    double lit_sum = 0;
-    for (size_t i = 0; i < pixel_sample.size(); ++i) {
-        glm::dvec3 c[2] = {sky, sky};
-        if (pixel_sample[i] >= 0) {
-            const size_t r = static_cast<size_t>(pixel_sample[i]);
-            const double vis = visible[r];
-            lit_sum += vis;
-            const glm::dvec3 l = glm::normalize(light_pos - hit_point[i]);
-            for (int bent = 0; bent < 2; ++bent) {
-                const double light = direct.direct(bent == 1, hit_triangle[i], hit_point[i], hit_normal[i], l);
-                c[bent] = albedo[merged.material[hit_triangle[i]]] * (0.12 + 0.88 * light * vis);
-            }
-        }
-        for (int b = 0; b < 2; ++b)
-            for (int k = 0; k < 3; ++k) images[b].pixels[i * 3 + k] = penumbra::scene::linearToSrgb8(float(c[b][k]));
-    }
-    penumbra::scene::writePng(args.out, images[args.shading == "bent" ? 1 : 0]);
-    if (args.compare_shading) writeShadingCompare(args.out, images[0], images[1]);
+    const double lit_sum = shadeAndWrite(args, merged, light_pos, hits, visible);
     const double shade_ms = msSince(t0);
 
     const double total_ms = msSince(t_start);
@@ -1645,6 +1813,8 @@ int main(int argc, char** argv) {
                "             --reference compares every bit with the oracle and writes <out>_reference.png, <out>_error.png\n"
                "  hard       the GPU alias-free hard-shadow pipeline from the light's centre on a headless GL context\n"
                "             (PENUMBRA_GL=egl|osmesa); --reference adds the oracle's verdict on the same samples\n"
+               "  hpc        hierarchical penumbra casting on the CPU (laine2005; --sets K sets of --samples per pixel,\n"
+               "             8 by default); --reference compares every bit with the oracle on the same light samples\n"
                "Built-in scenes: torus_knot columns hairball grass. Progress of long phases goes to stderr.\n"
                "Exit codes: 0 done, 1 failed while running, 2 bad arguments or a run that cannot work.");
     addOptions(app, args, raw);
@@ -1673,6 +1843,7 @@ int main(int argc, char** argv) {
         const double load_ms = msSince(t0);
         if (args.mode == "hard") return runHard(args, scene, oracle, merged, light_pos, load_ms, t_start);
         if (args.mode == "soft") return runSoft(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
+        if (args.mode == "hpc") return runHpc(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
         return runReference(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
     } catch (const UsageError& e) {
         std::fprintf(stderr, "soft_shadows: %s\n(soft_shadows --help lists the options)\n", e.what.c_str());
