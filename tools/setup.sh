@@ -18,6 +18,7 @@ packages=(
   libgmp-dev                         # exact rational signs in blocker_filter_test
   libmeshoptimizer-dev               # support/scene/weld.hpp: welding split vertices (bent normals)
   python3-matplotlib                 # tools/plot_bench.py, tools/plot_lut_error.py (their ctest plots)
+  libembree-dev                      # benchmarks/penumbra_casting_bench.cpp: Embree 3 shadow rays, the baseline
   patchelf                           # tools/gpu_bundle.sh: rpath $ORIGIN/../lib on the bundled binaries
 )
 
