@@ -17,6 +17,7 @@
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -291,6 +292,7 @@ TEST_CASE("every optimisation off alone, thread counts, batch sizes: identical b
         add("lazy_volumes off", [](auto& o) { o.lazy_volumes = false; });
         add("on_demand_masks off", [](auto& o) { o.on_demand_masks = false; });
         add("area_sort off", [](auto& o) { o.area_sort = false; });
+        add("certified_fast_path off", [](auto& o) { o.certified_fast_path = false; });
         add("2 threads", [](auto& o) { o.threads = 2; });
         add("3 threads", [](auto& o) { o.threads = 3; });
         add("batches of 1000", [](auto& o) { o.batch_triangles = 1000; });
@@ -299,7 +301,7 @@ TEST_CASE("every optimisation off alone, thread counts, batch sizes: identical b
             o.group_size = 8;
         });
         add("everything off", [](auto& o) {
-            o.umbra_bits = o.active_planes = o.lazy_volumes = o.on_demand_masks = o.area_sort = false;
+            o.umbra_bits = o.active_planes = o.lazy_volumes = o.on_demand_masks = o.area_sort = o.certified_fast_path = false;
         });
         for (const auto& [name, options] : variants) {
             INFO(setup.name << ": " << name);
@@ -310,6 +312,8 @@ TEST_CASE("every optimisation off alone, thread counts, batch sizes: identical b
                 // Work counters do not depend on the thread count either.
                 CHECK(r.stats.nodes_visited == reference.stats.nodes_visited);
                 CHECK(r.stats.pairs_tested == reference.stats.pairs_tested);
+                CHECK(r.stats.pairs_certified == reference.stats.pairs_certified);
+                CHECK(r.stats.coplanar_skips == reference.stats.coplanar_skips);
                 CHECK(r.stats.umbra_skips == reference.stats.umbra_skips);
             }
             MESSAGE(setup.name, " ", name, ": pairs tested ", r.stats.pairs_tested, " (all on: ",
@@ -318,6 +322,227 @@ TEST_CASE("every optimisation off alone, thread counts, batch sizes: identical b
                     r.stats.rebuilds);
         }
     }
+}
+
+namespace {
+
+/// Adversarial configurations for the certified fast path: receivers on and within 1e-12 .. 1e-6
+/// (relative) of hard-shadow boundaries (an edge of T seen from a sample, and the vertices), just
+/// behind T (t near 0) and on T's plane, a triangle nearly edge-on to the light, one close to the
+/// light (t near 1), a floor the receivers lie on; optionally rotated and moved 1e5 away with
+/// dyadic coordinates. Returns the mesh, the receivers, their sets and the sample sets.
+struct Adversarial {
+    Mesh mesh;
+    std::vector<dvec3> receivers;
+    std::vector<uint32_t> receiver_sets;
+    penumbra::Light light;
+    penumbra::LightSampleSets sets;
+};
+
+Adversarial adversarialScene(bool rotate, bool far, uint32_t seed) {
+    const double offset = far ? 1e5 : 0.0;
+    const glm::dmat3 rotation = rotate ? glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.7, glm::normalize(dvec3(0.3, 1.0, -0.5))))
+                                       : glm::dmat3(1.0);
+    // Dyadic (multiples of 2^-24) before the offset, so that the translation is exact.
+    const auto place = [&](const dvec3& x) {
+        dvec3 y = rotation * x;
+        for (int a = 0; a < 3; ++a) y[a] = std::ldexp(std::round(std::ldexp(y[a], 24)), -24) + offset;
+        return y;
+    };
+    Adversarial adv;
+    adv.light.shape = penumbra::LightShape::Disk;
+    adv.light.center = dvec3(0.0, 3.0, 0.0);
+    adv.light.axis_z = dvec3(0.0, -1.0, 0.0);
+    adv.light.size = dvec3(0.6);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 64;
+    sample_options.sets = 4;
+    sample_options.seed = seed;
+    adv.sets = penumbra::makeLightSampleSets(adv.light, sample_options);
+    for (dvec3& x : adv.sets.world) x = place(x);
+    adv.sets.frame.center = place(adv.sets.frame.center);
+    adv.sets.frame.rotation = rotation * adv.sets.frame.rotation;
+    adv.light.center = adv.sets.frame.center;
+    adv.light.axis_z = rotation * adv.light.axis_z;
+    const std::vector<std::array<dvec3, 3>> blockers = {
+        {dvec3(-0.5, 1.0, -0.4), dvec3(0.6, 1.0, -0.3), dvec3(0.1, 1.0, 0.5)},      // parallel to the light
+        {dvec3(0.2, 0.4, -0.5), dvec3(0.2 + 1e-7, 1.9, 0.0), dvec3(0.2, 0.5, 0.6)},  // nearly edge-on to the light
+        {dvec3(-0.3, 2.75, -0.2), dvec3(0.25, 2.8, -0.1), dvec3(0.0, 2.7, 0.3)},    // close to the light (t near 1)
+        {dvec3(-0.9, 1.3, 0.4), dvec3(-0.2, 1.6, 0.9), dvec3(-0.6, 1.1, 1.1)},      // tilted
+    };
+    const dvec3 floor[4] = {dvec3(-4, -0.5, -4), dvec3(4, -0.5, -4), dvec3(4, -0.5, 4), dvec3(-4, -0.5, 4)};
+    std::vector<std::array<dvec3, 3>> placed;
+    for (const auto& tri : blockers) placed.push_back({place(tri[0]), place(tri[1]), place(tri[2])});
+    placed.push_back({place(floor[0]), place(floor[1]), place(floor[2])});
+    placed.push_back({place(floor[0]), place(floor[2]), place(floor[3])});
+    for (const auto& tri : placed) {
+        for (const dvec3& v : tri) {
+            adv.mesh.indices.push_back(uint32_t(adv.mesh.positions.size()));
+            adv.mesh.positions.push_back(v);
+        }
+    }
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<uint32_t> pick_set(0, adv.sets.sets() - 1), pick_sample(0, adv.sets.count() - 1);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    const double deltas[] = {0.0, 1e-12, -1e-12, 1e-10, -1e-10, 1e-9, -1e-9, 1e-8, -1e-8, 1e-6, -1e-6};
+    const auto add = [&](const dvec3& p, uint32_t set) {
+        adv.receivers.push_back(p);
+        adv.receiver_sets.push_back(set);
+    };
+    for (size_t b = 0; b < blockers.size(); ++b) {
+        const auto& tri = placed[b];
+        for (int pick = 0; pick < 5; ++pick) {
+            const uint32_t set = pick_set(rng);
+            const dvec3 s = adv.sets.worldSet(set)[pick_sample(rng)];
+            for (int e = 0; e < 3; ++e) {
+                const dvec3 a = tri[e], c = tri[(e + 1) % 3];
+                for (double lambda : {0.0, 0.35, 0.5, 1.0}) {
+                    const dvec3 q = a + lambda * (c - a);
+                    const dvec3 m = glm::normalize(glm::cross(c - a, q - s));
+                    for (double tau : {1.0 + 1e-9, 1.7, 3.0}) {
+                        const dvec3 p0 = s + tau * (q - s);
+                        for (double delta : deltas) add(p0 + delta * glm::length(p0 - s) * m, set);
+                    }
+                }
+            }
+            // Just behind T (t near 0), on T's plane (inside, on an edge) and beyond, interior lines.
+            const dvec3 inner = (tri[0] + tri[1] + tri[2]) / 3.0;
+            const dvec3 edge_mid = 0.5 * (tri[0] + tri[1]);
+            for (double delta : {0.0, 1e-12, 1e-9, 1e-6, -1e-9}) {
+                add(inner + delta * (inner - s), set);
+                add(edge_mid + delta * (edge_mid - s), set);
+            }
+            for (int i = 0; i < 10; ++i) {
+                double u = unit(rng), v = unit(rng);
+                if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+                const dvec3 q = tri[0] + u * (tri[1] - tri[0]) + v * (tri[2] - tri[0]);
+                add(s + (1.0 + 2.0 * unit(rng)) * (q - s), set);
+                add(q, set);
+            }
+        }
+    }
+    // Receivers on the floor (their own triangles: the coplanar rule), on its shared diagonal.
+    for (int i = 0; i < 200; ++i) {
+        const double u = unit(rng), v = unit(rng);
+        add(place(dvec3(-3.0 + 6.0 * u, -0.5, -3.0 + 6.0 * v)), uint32_t(i % 4));
+        add(place(dvec3(-3.0 + 6.0 * u, -0.5, -3.0 + 6.0 * u)), uint32_t(i % 4));
+    }
+    return adv;
+}
+
+}  // namespace
+
+TEST_CASE("certified fast path: adversarial receivers near hard-shadow boundaries, edge-on blockers, far offset") {
+    const uint32_t seed = penumbra::test::testSeed(6);
+    uint64_t certified = 0, classified = 0, coplanar = 0, pairs = 0, ties = 0;
+    for (int variant = 0; variant < 3; ++variant) {
+        const Adversarial adv = adversarialScene(variant >= 1, variant == 2, seed + uint32_t(variant));
+        const penumbra::reference::VisibilityOracle oracle(adv.mesh.positions, adv.mesh.indices);
+        for (const auto& eps : {std::pair<double, double>{1e-9, 1e-9}, {1e-6, 1e-7}, {1e-12, 1e-12}}) {
+            INFO("variant " << variant << " tie_epsilon " << eps.first << " coplanar_epsilon " << eps.second);
+            penumbra::PenumbraCastingOptions options;
+            options.oracle.tie_epsilon = eps.first;
+            options.oracle.coplanar_epsilon = eps.second;
+            options.threads = 2;
+            const penumbra::PenumbraCastingResult fast = cast(adv.mesh, adv.receivers, adv.light, adv.sets, options, adv.receiver_sets);
+            options.certified_fast_path = false;
+            const penumbra::PenumbraCastingResult slow = cast(adv.mesh, adv.receivers, adv.light, adv.sets, options, adv.receiver_sets);
+            const penumbra::reference::VisibilityResult truth =
+                oracleTruth(oracle, adv.receivers, adv.receiver_sets, adv.sets, options.oracle);
+            const Tally t = compare(fast, truth);
+            CHECK(t.mismatched == 0);
+            CHECK(t.tie_mismatched == 0);
+            CHECK(fast.blocked == slow.blocked);
+            CHECK(fast.ties == slow.ties);
+            CHECK(slow.stats.pairs_certified == 0);
+            CHECK(fast.stats.pairs_classified == fast.stats.pairs_tested);
+            certified += fast.stats.pairs_certified;
+            classified += fast.stats.pairs_classified;
+            coplanar += fast.stats.coplanar_skips;
+            pairs += t.pairs;
+            ties += t.ties;
+        }
+    }
+    CHECK(certified > 0);
+    CHECK(coplanar > 0);
+    MESSAGE("adversarial: ", pairs, " pairs, ", ties, " oracle ties, ", certified, " pairs certified, ", classified,
+            " classified, ", coplanar, " coplanar skips; 0 mismatches");
+}
+
+TEST_CASE("certified fast path: every certified verdict is the oracle's classification of that triangle") {
+    // No masking by other triangles: each (T, p, s) the fast path certifies is compared with
+    // detail::oracle::classifySegment of T alone. Receivers include offsets around the margins.
+    namespace dc = penumbra::detail::casting;
+    namespace oracle = penumbra::detail::oracle;
+    const uint32_t seed = penumbra::test::testSeed(7);
+    uint64_t hits = 0, misses = 0, open = 0, coplanar_pairs = 0, wrong = 0, pyramids = 0, rejected = 0;
+    for (int variant = 0; variant < 3; ++variant) {
+        Adversarial adv = adversarialScene(variant >= 1, variant == 2, seed + uint32_t(variant));
+        // Extra receivers around the certification margins (2^-26 relative, t error 2^-20).
+        const size_t base_count = adv.receivers.size();
+        for (size_t r = 0; r < base_count; r += 7) {
+            const dvec3 p = adv.receivers[r];
+            for (double d : {3e-8, 6e-8, 1.2e-7, 2.5e-7, 5e-7, 2e-6, 5e-6, 1e-5, 1e-4}) {
+                adv.receivers.push_back(p + d * dvec3(0.6, 0.0, 0.8) * glm::length(p - adv.sets.frame.center));
+                adv.receiver_sets.push_back(adv.receiver_sets[r]);
+                adv.receivers.push_back(p + d * dvec3(0.0, 1.0, 0.0) * glm::length(p - adv.sets.frame.center));
+                adv.receiver_sets.push_back(adv.receiver_sets[r]);
+            }
+        }
+        for (const auto& eps : {std::pair<double, double>{1e-9, 1e-9}, {1e-6, 1e-7}, {0.0, 0.0}}) {
+            INFO("variant " << variant << " tie_epsilon " << eps.first << " coplanar_epsilon " << eps.second);
+            penumbra::reference::VisibilityOptions options;
+            options.tie_epsilon = eps.first;
+            options.coplanar_epsilon = eps.second;
+            for (size_t t = 0; t < adv.mesh.triangles(); ++t) {
+                dc::TriangleRecord rec;
+                dc::setTriangle(rec, adv.mesh.positions[adv.mesh.indices[3 * t]], adv.mesh.positions[adv.mesh.indices[3 * t + 1]],
+                                adv.mesh.positions[adv.mesh.indices[3 * t + 2]]);
+                for (size_t r = t % 3; r < adv.receivers.size(); r += 3) {  // a third of them: test time
+                    const dvec3& p = adv.receivers[r];
+                    const dvec3* samples = adv.sets.worldSet(adv.receiver_sets[r]);
+                    std::vector<dvec3> set(samples, samples + adv.sets.count());
+                    double reach2 = 0.0, reach_inf = 0.0;
+                    dc::sampleReach(set, 0.0, p, reach2, reach_inf);  // the samples themselves: tighter than the caster's
+                    const bool coplanar = dc::coplanarIgnoredForAll(rec, p, options.coplanar_epsilon);
+                    dc::Pyramid py;
+                    const bool usable = !coplanar && dc::buildPyramid(rec, p, reach2, reach_inf, options.tie_epsilon,
+                                                                     options.coplanar_epsilon, py);
+                    pyramids += usable;
+                    rejected += !coplanar && !usable;
+                    for (const dvec3& s : set) {
+                        if (p == s) continue;
+                        const oracle::Verdict v = oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options));
+                        if (coplanar) {
+                            ++coplanar_pairs;
+                            wrong += v.hit || v.fragile;
+                            continue;
+                        }
+                        if (!usable) continue;
+                        double hit = 0.0, miss = 0.0;
+                        dc::pyramidScores(py, s.x - p.x, s.y - p.y, s.z - p.z, hit, miss);
+                        wrong += hit > 0.0 && miss > 0.0;
+                        if (hit > 0.0) {
+                            ++hits;
+                            wrong += !(v.hit && !v.fragile);
+                        } else if (miss > 0.0) {
+                            ++misses;
+                            wrong += v.hit || v.fragile;
+                        } else {
+                            ++open;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    CHECK(wrong == 0);
+    CHECK(hits > 0);
+    CHECK(misses > 0);
+    CHECK(coplanar_pairs > 0);
+    MESSAGE("certified verdicts vs the oracle per triangle: ", hits, " hits, ", misses, " misses, ", coplanar_pairs,
+            " coplanar-ignored, ", open, " left to the oracle, ", wrong, " wrong; pyramids ", pyramids, ", unusable ",
+            rejected);
 }
 
 TEST_CASE("on-demand masks: peak bytes below R * N / 8 with many unshadowed receivers") {
@@ -555,7 +780,7 @@ TEST_CASE("speed: penumbra casting vs VisibilityOracle::evaluate, torus knot, pr
         }
     const penumbra::Light light = lightsOf(scene)[0].second;  // disk
     penumbra::LightSampleOptions sample_options;
-    sample_options.count = 256;
+    sample_options.count = stressRun() ? 1024 : 256;
     sample_options.sets = k;
     const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
 
@@ -569,9 +794,12 @@ TEST_CASE("speed: penumbra casting vs VisibilityOracle::evaluate, torus knot, pr
     CHECK(t.tie_mismatched == 0);
     const double cast_s = std::chrono::duration<double>(t1 - t0).count();
     const double oracle_s = std::chrono::duration<double>(t2 - t1).count();
-    MESSAGE("torus knot ", width, "x", height, " (", receivers.size(), " receivers), N = 256, K = ", k, ", ",
-            mesh.triangles(), " triangles, ", std::thread::hardware_concurrency(), " threads: penumbra casting ", cast_s,
-            " s, oracle evaluate ", oracle_s, " s (", oracle_s / cast_s, "x); pairs tested ", result.stats.pairs_tested,
-            ", masks peak ", result.stats.mask_bytes_peak, " of ", result.stats.mask_bytes_full, " bytes, rebuilds ",
+    MESSAGE("torus knot ", width, "x", height, " (", receivers.size(), " receivers), N = ", sample_options.count, ", K = ", k,
+            ", ", mesh.triangles(), " triangles, ", std::thread::hardware_concurrency(), " threads: penumbra casting ", cast_s,
+            " s, oracle evaluate ", oracle_s, " s (", oracle_s / cast_s, "x); pairs classified ",
+            result.stats.pairs_classified, ", certified ", result.stats.pairs_certified, " (hits ",
+            result.stats.pairs_certified_hits, "), hard-culled ", result.stats.pairs_hard_culled, ", coplanar skips ",
+            result.stats.coplanar_skips, ", pyramids ", result.stats.pyramids_built, ", V_i built ",
+            result.stats.hard_volumes_built, ", masks peak ", result.stats.mask_bytes_peak, " of ", result.stats.mask_bytes_full, " bytes, rebuilds ",
             result.stats.rebuilds, ", ties ", t.ties);
 }

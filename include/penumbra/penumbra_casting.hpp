@@ -29,7 +29,8 @@
 // same samples and options.oracle: blocked = some triangle hits the open segment, tie = no robust
 // hit and some fragile verdict (coplanar rule, locality rule, p == s never blocked). Every
 // candidate pair is decided by the oracle's own per-triangle classification
-// (detail::oracle::classifySegment); the hierarchy only culls (triangle, pair) combinations that
+// (detail::oracle::classifySegment) or by a certified fast verdict that provably equals it (see
+// "Certified verdicts" below); the hierarchy only culls (triangle, pair) combinations that
 // cannot give a verdict, with margins far above the oracle's tolerances (see "Culling" below), and
 // the umbra shortcuts only skip pairs that already hold a ROBUST hit (whose bits can no longer
 // change). The bits therefore do not depend on the triangle order, the batch size, the thread
@@ -83,6 +84,42 @@
 // is meaningless (|n.d| ~ 2^-52 of |n| |d|) can only be fragile verdicts and are only caught when
 // they lie within delta. Exactness therefore holds for tie_epsilon >= 1e-12 (the default is
 // 1e-9); below, delta grows towards E and culling fades out.
+//
+// Certified verdicts (options.certified_fast_path, default on; off: every surviving pair goes to
+// classifySegment as before, with the same bits). Per (T, receiver p) reaching a leaf:
+//   - Coplanar skip. The oracle's side_p = dot3(n, v0 - p) and pointTriangleDistance2(p, T) depend
+//     on T and p only; its limit and reach grow monotonically with its scale = max(|s - p|_inf,
+//     S_T), S_T = max_i |v_i - p|_inf. Evaluating rule 2 exactly as the oracle does with S_T for
+//     the scale therefore proves "T ignored for every sample": the relation is skipped whole
+//     (stats.coplanar_skips; receivers on T itself, the bulk of on-surface work).
+//   - Shadow pyramid (laine2005's hard volume seen from p instead of s): unit normals n_e of the
+//     planes through p and T's edges (third vertex positive) and T's unit normal oriented so that
+//     h_p = dist(p, plane) > 0; per sample d = s - p, h_e = n_e . d, H = n_T . d (t = h_p / H).
+//     In the sheared frame of the oracle's ray the 2D distance from the ray's trace to the
+//     projected line of edge e is >= dist(p, line e) |h_e| / |d| (the projection lies in the plane
+//     through e parallel to d), and the trace is on T's side of it iff h_e H > 0. The oracle's
+//     sheared vertices are within 12 u S of the exact ones (u = 2^-53, S >= its scale), its
+//     nearEdge rounding is below 23 u S, and with a sheared margin M >= 2^-26 S its t differs
+//     from the exact h_p / H by < 2^-20 S / H (vertex displacement times the plane's slope 1/H in
+//     the sheared frame, plus the edge functions' rounding over 2 area >= M * perimeter).
+//     A pair is a certified ROBUST HIT when h_e >= M dmax / dist(p, e) + err (all e, M = (eps +
+//     2^-26) S), eps H < h_p - 2^-20 S and (1 - eps) H > h_p + 2^-20 S (rule 3a, t in (eps,
+//     1 - eps)), h_p and H - h_p > cop S + 48 u kappa S (rule 2 not triggered and rule 3c's
+//     plane sides certain: kappa = |e1| |e2| / |n| bounds the oracle's side error), all with
+//     the computed quantities' error bounds (normals' 32 u conditioning, dmax >= |s - p|) added;
+//     rule 4's slab test passes since the exact hit point lies in T's box and the box grows by
+//     >= 1e-12 of its scale. It is a certified CLEAR MISS when |H| > err and some edge has h_e of
+//     the other sign with |h_e| >= (eps (1 + 2^-40) + 2^-40) S dmax / dist(p, e) + err: the trace
+//     is then farther than eps * scale plus every rounding from the whole computed triangle, so
+//     the oracle is "not inside, not near an edge" and returns at once. Everything else
+//     (ill-conditioned pyramids: p within rounding of T's plane or of an edge's line; pairs in the
+//     bands) goes to classifySegment. Own rounding: every bound is inflated by (1 + 2^-40) per
+//     step; FMA contraction only lowers the errors bounded. The whole group is decided at once
+//     when its bound's vertices (plus slack) all certify (group hit: OR of the group's mask).
+//     stats.pairs_certified / pairs_certified_hits count pairs so decided, pairs_classified
+//     (= pairs_tested) the oracle's classifications. Valid for every tie_epsilon and
+//     coplanar_epsilon in [0, 0.1]; tests/penumbra_casting_test.cpp checks every certified
+//     verdict of adversarial configurations against classifySegment of that triangle alone.
 //
 // Degenerate input:
 //   - A triangle with a NaN / infinite vertex or |coordinate| > 1e50 -> addTriangle throws
@@ -154,6 +191,7 @@ struct PenumbraCastingOptions {
     bool lazy_volumes = true;            ///< §3.3 C: build V_k and V_i on first need
     bool on_demand_masks = true;         ///< §3.3 D: allocate masks at the first verdict, free in umbra
     bool area_sort = true;               ///< coarse blocker sorting: area buckets, largest first
+    bool certified_fast_path = true;     ///< decide pairs without the oracle where provably safe (see "Certified verdicts")
     unsigned threads = 0;                ///< 0: std::thread::hardware_concurrency()
     uint32_t batch_triangles = 65536;    ///< triangles buffered (and area-sorted) before processing
     reference::VisibilityOptions oracle; ///< tie / coplanar epsilons, as the oracle (threads ignored)
@@ -167,6 +205,11 @@ struct PenumbraCastingStats {
     uint64_t triangles_degenerate = 0;  ///< dropped by detail::degenerateTriangle
     uint64_t triangles_near_light = 0;  ///< no light penumbra volume (T too close to the light)
     uint64_t pairs_tested = 0;          ///< oracle classifications (detail::oracle::classifySegment)
+    uint64_t pairs_classified = 0;      ///< the same count as pairs_tested (the name the fast path's reports use)
+    uint64_t pairs_certified = 0;       ///< candidate pairs decided by the certified fast path (hits + misses)
+    uint64_t pairs_certified_hits = 0;  ///< of which robust hits
+    uint64_t coplanar_skips = 0;        ///< (triangle, receiver) relations skipped whole: the coplanar rule ignores T for p
+    uint64_t pyramids_built = 0;        ///< per-(triangle, receiver) shadow pyramids built (certified fast path)
     uint64_t pairs_hard_culled = 0;     ///< candidate pairs rejected by a hard shadow volume
     uint64_t nodes_visited = 0;         ///< BVH nodes entered
     uint64_t umbra_skips = 0;           ///< nodes and groups skipped thanks to umbra bits
@@ -258,6 +301,17 @@ inline uint32_t lowestBit(uint32_t bits) {
 #else
     uint32_t i = 0;
     while (!(bits & 1u)) bits >>= 1, ++i;
+    return i;
+#endif
+}
+
+/// Index of the lowest set bit of a non-zero 64-bit word.
+inline uint32_t lowestBit64(uint64_t bits) {
+#if defined(__GNUC__) || defined(__clang__)
+    return static_cast<uint32_t>(__builtin_ctzll(bits));
+#else
+    uint32_t i = 0;
+    while (!(bits & 1ull)) bits >>= 1, ++i;
     return i;
 #endif
 }
@@ -485,7 +539,12 @@ struct GroupEntry {
 struct Counters {
     uint64_t pairs_tested = 0, pairs_hard_culled = 0, nodes_visited = 0, umbra_skips = 0;
     uint64_t group_volumes_built = 0, hard_volumes_built = 0;
+    uint64_t pairs_certified = 0, pairs_certified_hits = 0, coplanar_skips = 0, pyramids_built = 0;
     void add(const Counters& c) {
+        pairs_certified += c.pairs_certified;
+        pairs_certified_hits += c.pairs_certified_hits;
+        coplanar_skips += c.coplanar_skips;
+        pyramids_built += c.pyramids_built;
         pairs_tested += c.pairs_tested;
         pairs_hard_culled += c.pairs_hard_culled;
         nodes_visited += c.nodes_visited;
@@ -505,7 +564,158 @@ struct TriangleRecord {
     Tolerance tol;
     double gap = 0;  // lower bound of dist(T, all samples)
     Volume light_volume;
+    // The oracle's own plane data (rules 2 and 3c), bit for bit: n = cross3(v1 - v0, v2 - v0).
+    glm::dvec3 oracle_n{0.0};
+    double oracle_n_length = 0;  // length3(n)
+    double kappa = 0;            // >= |v1 - v0| |v2 - v0| / |n| (conditioning of the oracle's plane test)
 };
+
+/// Certified fast path (see "Certified verdicts" in the header comment): the shadow pyramid of T
+/// seen from one receiver p. For d = s - p (computed), h_e = n[e] . d (e < 3: the plane through p
+/// and edge e, T's third vertex on its positive side) and H = n[3] . d (T's unit normal, oriented
+/// so that h_p = n[3] . (v0 - p) > 0):
+///   certified robust hit  <=> h_e >= hit[e] (e < 3) and hit_lo < H < hit_hi;
+///   certified clear miss  <=> H > h_err and some h_e <= -miss[e], or H < -h_err and some h_e >= miss[e].
+struct Pyramid {
+    double n[4][3];
+    double hit[3], miss[3];
+    double hit_lo = 0, hit_hi = 0, h_err = 0;
+};
+
+inline constexpr double kU = 0x1p-53;                 // unit roundoff
+inline constexpr double kUp = 1.0 + 0x1p-40;          // covers the rounding of a few operations on a bound
+inline constexpr double kDown = 1.0 - 0x1p-40;
+inline constexpr double kHitMargin = 0x1p-26;         // certified hits: sheared edge margin >= (eps + 2^-26) * scale
+inline constexpr double kMissMargin = 0x1p-40;        // certified misses: sheared margin >= eps * scale + 2^-40 * scale
+inline constexpr double kParameterError = 0x1p-20;    // |t_oracle - t_exact| <= 2^-20 * scale / H on a certified hit
+
+/// True when the oracle ignores T for EVERY pair (p, s) by its coplanar rule for the receiver
+/// (rule 2). The oracle's side_p and point-triangle distance depend on T and p only, and its
+/// limit and reach grow with its scale = max(|s - p|_inf, S_T) >= S_T (rounding is monotone):
+/// evaluating them exactly as the oracle does with S_T in place of the scale is a sufficient test.
+inline bool coplanarIgnoredForAll(const TriangleRecord& rec, const glm::dvec3& p, double coplanar_epsilon) {
+    namespace oracle = detail::oracle;
+    const glm::dvec3 a = rec.tri.v0 - p, b = rec.tri.v1 - p, c = rec.tri.v2 - p;
+    const double s_t = std::max(oracle::maxAbs(a), std::max(oracle::maxAbs(b), oracle::maxAbs(c)));
+    const double reach = coplanar_epsilon * s_t;
+    const double limit = reach * rec.oracle_n_length;
+    const double side_p = oracle::dot3(rec.oracle_n, rec.tri.v0 - p);
+    if (!(std::fabs(side_p) <= limit)) return false;
+    return penumbra::detail::pointTriangleDistance2<double>(p, rec.tri.v0, rec.tri.v1, rec.tri.v2) <= reach * reach;
+}
+
+/// Sets a record's triangle, its unit normal and the oracle's plane data (not its volumes).
+inline void setTriangle(TriangleRecord& rec, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    rec.v[0] = a;
+    rec.v[1] = b;
+    rec.v[2] = c;
+    rec.tri = detail::oracle::Triangle{a, b, c, 0u};
+    rec.normal_ok = unitCross(b - a, c - a, rec.normal, rec.normal_err);
+    rec.oracle_n = detail::oracle::cross3(rec.tri.v1 - rec.tri.v0, rec.tri.v2 - rec.tri.v0);
+    rec.oracle_n_length = detail::oracle::length3(rec.oracle_n);
+    // |n - N| <= 8 u |e1| |e2| for the exact normal N (cross3 of rounded differences).
+    const double product = glm::length(b - a) * glm::length(c - a) * kUp;
+    const double exact_lo = rec.oracle_n_length * kDown - 8.0 * kU * product;
+    rec.kappa = exact_lo > 0.0 ? product / exact_lo * kUp : std::numeric_limits<double>::infinity();
+}
+
+/// Scores of one sample (d = s - p, computed): hit > 0 certifies a robust hit, miss > 0 a clear
+/// miss. a - b > 0 <=> a > b for doubles and fl(a + b) <= 0 <=> a + b <= 0, so these are the
+/// comparisons of Pyramid's comment (made strict). Branch-free: the group loop vectorises.
+inline void pyramidScores(const Pyramid& py, double dx, double dy, double dz, double& hit, double& miss) {
+    const double h0 = py.n[0][0] * dx + py.n[0][1] * dy + py.n[0][2] * dz;
+    const double h1 = py.n[1][0] * dx + py.n[1][1] * dy + py.n[1][2] * dz;
+    const double h2 = py.n[2][0] * dx + py.n[2][1] * dy + py.n[2][2] * dz;
+    const double hh = py.n[3][0] * dx + py.n[3][1] * dy + py.n[3][2] * dz;
+    hit = std::min(std::min(std::min(h0 - py.hit[0], h1 - py.hit[1]), std::min(h2 - py.hit[2], hh - py.hit_lo)), py.hit_hi - hh);
+    const double beyond = std::min(hh - py.h_err, -std::min(std::min(h0 + py.miss[0], h1 + py.miss[1]), h2 + py.miss[2]));
+    const double behind = std::min(-hh - py.h_err, std::max(std::max(h0 - py.miss[0], h1 - py.miss[1]), h2 - py.miss[2]));
+    miss = std::max(beyond, behind);
+}
+
+/// Upper bounds of |s - p|_2 and |s - p|_inf over every sample within `slack` of the convex hull
+/// of `vertices` (the norms are convex).
+inline void sampleReach(const std::vector<glm::dvec3>& vertices, double slack, const glm::dvec3& p, double& reach2,
+                        double& reach_inf) {
+    double r2 = 0.0, ri = 0.0;
+    for (const glm::dvec3& x : vertices) {
+        const glm::dvec3 d = x - p;
+        r2 = std::max(r2, glm::length(d));
+        ri = std::max(ri, maxAbs3(d));
+    }
+    reach2 = (r2 * kUp + slack) * kUp;
+    reach_inf = (ri * kUp + slack) * kUp;
+}
+
+/// Builds the shadow pyramid of T from p, or false when it is ill-conditioned (p near T's plane
+/// or near the line of an edge): those pairs take the oracle path. reach2 / reach_inf: upper
+/// bounds of |s - p|_2 and |s - p|_inf over every sample.
+inline bool buildPyramid(const TriangleRecord& rec, const glm::dvec3& p, double reach2, double reach_inf, double eps,
+                         double cop, Pyramid& py) {
+    if (!rec.normal_ok) return false;
+    const glm::dvec3 w[3] = {rec.v[0] - p, rec.v[1] - p, rec.v[2] - p};
+    double w_len[3];
+    double w_inf = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        w_len[i] = glm::length(w[i]) * kUp;
+        w_inf = std::max(w_inf, maxAbs3(w[i]));
+    }
+    // S >= the oracle's scale of every pair (p, s); every margin below is measured against it.
+    const double scale = std::max(w_inf, reach_inf) * kUp;
+    glm::dvec3 nt = rec.normal;
+    double hp = glm::dot(nt, w[0]);
+    if (hp < 0.0) {
+        nt = -nt;
+        hp = -hp;
+    }
+    const double e_n = rec.normal_err + 8.0 * kU;
+    const double e_hp = e_n * w_len[0] * kUp;
+    if (!(hp > 2.0 * e_hp)) return false;  // the side of p is not certain
+    const double m_hit = (eps + kHitMargin) * scale * kUp;
+    const double m_miss = (eps * kUp + kMissMargin) * scale * kUp;
+    for (int e = 0; e < 3; ++e) {
+        const int a = e, b = (e + 1) % 3, c = (e + 2) % 3;
+        const glm::dvec3 edge = rec.v[b] - rec.v[a];
+        const glm::dvec3 cr = glm::cross(edge, w[a]);
+        const double len = glm::length(cr), edge_len = glm::length(edge);
+        if (!(len > 0.0) || !(edge_len > 0.0)) return false;
+        const double conditioning = edge_len * w_len[a] / len;
+        if (!(conditioning <= kMaxConditioning)) return false;
+        glm::dvec3 n = cr / len;
+        const double err = 16.0 * kUlp * conditioning + 8.0 * kU;  // unitCross's bound + the evaluation's rounding
+        double side = glm::dot(n, w[c]);
+        if (side < 0.0) {
+            n = -n;
+            side = -side;
+        }
+        if (!(side > 2.0 * err * w_len[c])) return false;  // orientation not certain
+        const double dist_lo = (len / edge_len) * kDown - 16.0 * kU * w_len[a];  // <= dist(p, line of e)
+        if (!(dist_lo > 0.0)) return false;
+        const double stretch = reach2 / dist_lo * kUp;
+        const double e_he = err * reach2 * kUp;
+        py.n[e][0] = n.x;
+        py.n[e][1] = n.y;
+        py.n[e][2] = n.z;
+        py.hit[e] = m_hit * stretch * kUp + e_he;
+        py.miss[e] = m_miss * stretch * kUp + e_he;
+    }
+    py.n[3][0] = nt.x;
+    py.n[3][1] = nt.y;
+    py.n[3][2] = nt.z;
+    py.h_err = e_n * reach2 * kUp;
+    const double h_lo = hp - e_hp, h_hi = hp + e_hp;
+    const double t_err = kParameterError * scale;
+    const double cop_p = cop * scale * kUp + 24.0 * kU * rec.kappa * scale;
+    const double cop_s = cop * scale * kUp + 48.0 * kU * rec.kappa * scale;
+    if (h_lo * kDown > t_err * kUp && h_lo * kDown > cop_p * kUp) {
+        py.hit_lo = std::max((h_hi + t_err) / (1.0 - eps), h_hi + cop_s) * kUp + py.h_err;
+        py.hit_hi = eps > 0.0 ? (h_lo - t_err * kUp) / eps * kDown - py.h_err : std::numeric_limits<double>::infinity();
+    } else {
+        py.hit_lo = std::numeric_limits<double>::infinity();
+        py.hit_hi = -std::numeric_limits<double>::infinity();
+    }
+    return true;
+}
 
 }  // namespace casting
 }  // namespace detail
@@ -608,6 +818,7 @@ private:
         std::vector<detail::casting::HardVolume> hard;
         std::vector<uint64_t> hard_stamp;  // per (set, group)
         std::vector<detail::casting::GroupEntry> entries;
+        std::vector<double> scores;  // certified fast path: scores of one group's samples
         uint64_t stamp = 0;
         uint64_t eager_done = 0;
         uint64_t newly_full = 0;
@@ -663,6 +874,31 @@ private:
             max_coord_ = std::max(max_coord_, dc::maxAbs3(s));
         }
         setupGroups(light, sets);
+        // Certified fast path: per receiver, upper bounds of |s - p|_2 and |s - p|_inf over every
+        // sample (the light's box is convex and holds every sample within its slack), and the
+        // samples of each (set, group) as coordinate arrays in members_ order.
+        reach2_.resize(r_count);
+        reach_inf_.resize(r_count);
+        for (size_t r = 0; r < r_count; ++r)
+            dc::sampleReach(light_poly_.vertices, light_poly_.slack, receivers_[r], reach2_[r], reach_inf_[r]);
+        member_offset_.assign(members_.size() + 1, 0);
+        max_members_ = 0;
+        for (size_t slot = 0; slot < members_.size(); ++slot) {
+            member_offset_[slot + 1] = member_offset_[slot] + members_[slot].size();
+            max_members_ = std::max(max_members_, members_[slot].size());
+        }
+        member_x_.resize(member_offset_.back());
+        member_y_.resize(member_offset_.back());
+        member_z_.resize(member_offset_.back());
+        for (size_t slot = 0; slot < members_.size(); ++slot) {
+            const size_t base = (slot / groups_) * n_;
+            for (size_t j = 0; j < members_[slot].size(); ++j) {
+                const glm::dvec3& x = samples_[base + members_[slot][j]];
+                member_x_[member_offset_[slot] + j] = x.x;
+                member_y_[member_offset_[slot] + j] = x.y;
+                member_z_[member_offset_[slot] + j] = x.z;
+            }
+        }
 
         state_.resize(r_count);
         stats_.mask_bytes_full = static_cast<uint64_t>(r_count) * n_ / 8;
@@ -687,6 +923,7 @@ private:
             w->group_stamp.assign(groups_, 0);
             w->hard.resize(samples_.size());
             w->hard_stamp.assign(static_cast<size_t>(k_) * groups_, 0);
+            w->scores.assign(2 * max_members_, 0.0);
             workers_.push_back(std::move(w));
         }
         std::vector<uint32_t> all(r_count);
@@ -965,14 +1202,17 @@ private:
         }
     }
 
+    void ensureRobust(State& st) {
+        if (st.robust) return;
+        st.robust_owned.reset(new uint32_t[words_]());
+        st.robust = st.robust_owned.get();
+        addMaskBytes(static_cast<int64_t>(words_ * sizeof(uint32_t)));
+    }
+
     void record(State& st, uint32_t sample, const detail::oracle::Verdict& verdict) {
         const uint32_t word = sample / 32, bit = 1u << (sample % 32);
         if (verdict.hit && !verdict.fragile) {
-            if (!st.robust) {
-                st.robust_owned.reset(new uint32_t[words_]());
-                st.robust = st.robust_owned.get();
-                addMaskBytes(static_cast<int64_t>(words_ * sizeof(uint32_t)));
-            }
+            ensureRobust(st);
             st.robust[word] |= bit;
             return;
         }
@@ -1010,10 +1250,7 @@ private:
 
     void prepareRecord(const TriangleInput& in, detail::casting::TriangleRecord& rec) const {
         namespace dc = detail::casting;
-        rec.v[0] = in.a;
-        rec.v[1] = in.b;
-        rec.v[2] = in.c;
-        rec.tri = detail::oracle::Triangle{in.a, in.b, in.c, 0u};
+        dc::setTriangle(rec, in.a, in.b, in.c);
         const glm::dvec3 lo = glm::min(box_lo_, glm::min(in.a, glm::min(in.b, in.c)));
         const glm::dvec3 hi = glm::max(box_hi_, glm::max(in.a, glm::max(in.b, in.c)));
         const double extent = dc::maxAbs3(hi - lo);
@@ -1024,7 +1261,6 @@ private:
         rec.tol.eta = 2.0 * eps + (extent > 0.0 ? rec.tol.delta / extent : 0.0);
         rec.tol.span = 2.0 * extent;
         rec.tol.abs_err = 16.0 * dc::kUlp * max_coord;
-        rec.normal_ok = dc::unitCross(in.b - in.a, in.c - in.a, rec.normal, rec.normal_err);
         rec.gap = dc::gapLowerBound(rec.v, light_poly_, rec.normal, rec.normal_ok, rec.tol, {});
         dc::buildPenumbraVolume(rec.v, rec.normal, rec.normal_err, rec.normal_ok, light_poly_, rec.gap, rec.tol,
                                 rec.light_volume);
@@ -1112,15 +1348,22 @@ private:
         namespace dc = detail::casting;
         namespace oracle = detail::oracle;
         const bool umbra = options_.umbra_bits;
+        const bool certified = options_.certified_fast_path;
         for (uint32_t j = node.first; j < node.first + node.count; ++j) {
             const uint32_t r = order_[j];
             State& st = state_[r];
             if (st.full) continue;
             const glm::dvec3& p = receivers_[r];
             if (rec.light_volume.culls && !dc::pointInside(rec.light_volume, p, light_mask)) continue;
+            if (certified && dc::coplanarIgnoredForAll(rec, p, options_.oracle.coplanar_epsilon)) {
+                ++w.counters.coplanar_skips;  // no verdict from T for any sample of p
+                continue;
+            }
             const uint32_t set = receiver_sets_[r];
             uint64_t* receiver_bits = receiver_umbra_.data() + static_cast<size_t>(r) * group_words_;
             bool group_completed = false;
+            int pyramid_state = certified ? 0 : -1;  // 0: not built yet, 1: usable, -1: oracle path
+            dc::Pyramid pyramid;
             for (size_t e = group_begin; e < group_end; ++e) {
                 const dc::GroupEntry entry = w.entries[e];
                 const uint32_t k = entry.group;
@@ -1133,9 +1376,19 @@ private:
                 ensureGroupVolume(w, rec, k);  // §3.3 C: a relation may become blocked here
                 const dc::Volume& volume = w.group_volume[k];
                 if (volume.culls && !dc::pointInside(volume, p, entry.built ? entry.mask : volume.allMask())) continue;
-                ensureHardVolumes(w, rec, set, k);
+                if (pyramid_state == 0) {
+                    ++w.counters.pyramids_built;
+                    pyramid_state = dc::buildPyramid(rec, p, reach2_[r], reach_inf_[r], options_.oracle.tie_epsilon,
+                                                     options_.oracle.coplanar_epsilon, pyramid)
+                                        ? 1
+                                        : -1;
+                }
                 const size_t base = static_cast<size_t>(set) * n_;
                 bool new_robust = false;
+                if (pyramid_state == 1) {
+                    new_robust = pyramidGroup(w, rec, pyramid, st, p, slot, base);
+                } else {
+                ensureHardVolumes(w, rec, set, k);
                 for (uint32_t i : members_[slot]) {
                     if (st.robust && ((st.robust[i / 32] >> (i % 32)) & 1u)) continue;  // already robustly blocked
                     const glm::dvec3& s = samples_[base + i];
@@ -1151,6 +1404,7 @@ private:
                     if (!verdict.hit && !verdict.fragile) continue;
                     record(st, i, verdict);
                     new_robust |= verdict.hit && !verdict.fragile;
+                }
                 }
                 if (umbra && new_robust) {
                     const uint32_t* mask = group_masks_.data() + slot * words_;
@@ -1174,6 +1428,111 @@ private:
                 }
             }
         }
+    }
+
+    /// The samples of one (set, group) against the shadow pyramid of (T, p): certified hits are
+    /// recorded as robust, certified misses dropped, the rest classified by the oracle. Returns
+    /// whether a new robust hit was recorded.
+    bool pyramidGroup(Worker& w, const detail::casting::TriangleRecord& rec, const detail::casting::Pyramid& py,
+                      State& st, const glm::dvec3& p, size_t slot, size_t base) {
+        namespace oracle = detail::oracle;
+        const size_t first = member_offset_[slot], count = member_offset_[slot + 1] - first;
+        const double* xs = member_x_.data() + first;
+        const double* ys = member_y_.data() + first;
+        const double* zs = member_z_.data() + first;
+        const double px = p.x, py_ = p.y, pz = p.z;
+        const double t0 = py.hit[0], t1 = py.hit[1], t2 = py.hit[2];
+        const double m0 = py.miss[0], m1 = py.miss[1], m2 = py.miss[2];
+        const double lo = py.hit_lo, hi = py.hit_hi, herr = py.h_err;
+        const std::vector<uint32_t>& members = members_[slot];
+        const uint32_t* group_mask = group_masks_.data() + slot * words_;
+
+        // Whole group at once (its bound with slack): every sample certified hit, or every sample
+        // certified missed through one edge plane. Same thresholds as per sample: the bound's
+        // vertices are evaluated with the same rounding bound, the slack covers the samples.
+        {
+            const detail::casting::Polytope& poly = group_polys_[slot % groups_];
+            const double slack = poly.slack * detail::casting::kUp;
+            double mn[4], mx[4];
+            for (int e = 0; e < 4; ++e) {
+                mn[e] = std::numeric_limits<double>::infinity();
+                mx[e] = -std::numeric_limits<double>::infinity();
+            }
+            for (const glm::dvec3& x : poly.vertices) {
+                const double dx = x.x - px, dy = x.y - py_, dz = x.z - pz;
+                for (int e = 0; e < 4; ++e) {
+                    const double h = py.n[e][0] * dx + py.n[e][1] * dy + py.n[e][2] * dz;
+                    mn[e] = std::min(mn[e], h);
+                    mx[e] = std::max(mx[e], h);
+                }
+            }
+            for (int e = 0; e < 4; ++e) {
+                mn[e] -= slack;
+                mx[e] += slack;
+            }
+            const bool all_hit = mn[0] >= t0 && mn[1] >= t1 && mn[2] >= t2 && mn[3] > lo && mx[3] < hi;
+            const bool all_miss = (mn[3] > herr && (mx[0] <= -m0 || mx[1] <= -m1 || mx[2] <= -m2)) ||
+                                  (mx[3] < -herr && (mn[0] >= m0 || mn[1] >= m1 || mn[2] >= m2));
+            if (all_hit || all_miss) {
+                uint64_t decided = 0;
+                for (size_t word = 0; word < words_; ++word) {
+                    const uint32_t robust = st.robust ? st.robust[word] : 0u;
+                    decided += oracle::popcount32(group_mask[word] & ~robust);
+                }
+                w.counters.pairs_certified += decided;
+                if (all_hit && decided > 0) {
+                    w.counters.pairs_certified_hits += decided;
+                    ensureRobust(st);
+                    for (size_t word = 0; word < words_; ++word) st.robust[word] |= group_mask[word];
+                    return true;
+                }
+                return false;
+            }
+        }
+
+        // Per sample, branch-free (vectorisable): a score > 0 certifies.
+        double* hit_score = w.scores.data();
+        double* miss_score = hit_score + count;
+        const detail::casting::Pyramid local = py;  // a local copy: the stores below cannot alias it
+        for (size_t j = 0; j < count; ++j)
+            detail::casting::pyramidScores(local, xs[j] - px, ys[j] - py_, zs[j] - pz, hit_score[j], miss_score[j]);
+        bool new_robust = false;
+        for (size_t chunk = 0; chunk < count; chunk += 64) {
+            const size_t chunk_end = std::min(count, chunk + 64);
+            uint64_t hits = 0, open = 0, blocked = 0;
+            for (size_t j = chunk; j < chunk_end; ++j) {
+                const uint32_t i = members[j];
+                const uint64_t bit = 1ull << (j - chunk);
+                hits |= hit_score[j] > 0.0 ? bit : 0ull;
+                open |= (hit_score[j] > 0.0 || miss_score[j] > 0.0) ? 0ull : bit;
+                if (st.robust) blocked |= ((st.robust[i / 32] >> (i % 32)) & 1u) ? bit : 0ull;  // already robust
+            }
+            hits &= ~blocked;
+            open &= ~blocked;
+            const uint64_t decided = ~(open | blocked) & (chunk_end - chunk == 64 ? ~0ull : (1ull << (chunk_end - chunk)) - 1ull);
+            w.counters.pairs_certified += static_cast<uint64_t>(oracle::popcount32(static_cast<uint32_t>(decided)) +
+                                                                oracle::popcount32(static_cast<uint32_t>(decided >> 32)));
+            if (hits != 0) {
+                new_robust = true;
+                ensureRobust(st);
+                for (uint64_t bits = hits; bits != 0; bits &= bits - 1) {
+                    const uint32_t i = members[chunk + detail::casting::lowestBit64(bits)];
+                    st.robust[i / 32] |= 1u << (i % 32);
+                    ++w.counters.pairs_certified_hits;
+                }
+            }
+            for (uint64_t bits = open; bits != 0; bits &= bits - 1) {
+                const uint32_t i = members[chunk + detail::casting::lowestBit64(bits)];
+                const glm::dvec3& s = samples_[base + i];
+                if (p == s) continue;  // empty open segment: never blocked
+                ++w.counters.pairs_tested;
+                const oracle::Verdict verdict = oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options_.oracle));
+                if (!verdict.hit && !verdict.fragile) continue;
+                record(st, i, verdict);
+                new_robust |= verdict.hit && !verdict.fragile;
+            }
+        }
+        return new_robust;
     }
 
     void processRoot(Worker& w, uint32_t root, size_t first, size_t last, const std::atomic<bool>& stop) {
@@ -1297,6 +1656,11 @@ private:
             w->newly_full = 0;
         }
         stats_.pairs_tested = counters_.pairs_tested;
+        stats_.pairs_classified = counters_.pairs_tested;
+        stats_.pairs_certified = counters_.pairs_certified;
+        stats_.pairs_certified_hits = counters_.pairs_certified_hits;
+        stats_.coplanar_skips = counters_.coplanar_skips;
+        stats_.pyramids_built = counters_.pyramids_built;
         stats_.pairs_hard_culled = counters_.pairs_hard_culled;
         stats_.nodes_visited = counters_.nodes_visited;
         stats_.umbra_skips = counters_.umbra_skips;
@@ -1329,6 +1693,10 @@ private:
     unsigned threads_ = 1;
     std::vector<std::vector<uint32_t>> members_;  // [set * G + k]: sample indices
     std::vector<uint32_t> group_masks_;           // [(set * G + k) * words + w]
+    std::vector<size_t> member_offset_;           // [set * G + k]: first entry in member_x_ / _y_ / _z_
+    std::vector<double> member_x_, member_y_, member_z_;
+    size_t max_members_ = 0;
+    std::vector<double> reach2_, reach_inf_;      // per receiver: bounds of |s - p|_2, |s - p|_inf
     detail::casting::Polytope light_poly_;
     std::vector<detail::casting::Polytope> group_polys_;
     glm::dvec3 box_lo_{0.0}, box_hi_{0.0};
