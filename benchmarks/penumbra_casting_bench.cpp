@@ -27,8 +27,10 @@
 //                                            every `kOracleStride`-th receiver (must be 0)
 //   err_embree_vs_oracle                     share of those receivers' non-tie bits Embree gets
 //                                            wrong (float, the offset)
-//   oracle_ties, receivers, samples, triangles, blocked_fraction, pairs_tested (ours)
-// BM_PenumbraCastingOptimizations: each §3.3 optimization (and area sorting) switched off alone at
+//   oracle_ties, receivers, samples, triangles, blocked_fraction, pairs_classified (ours: pairs the
+//   oracle's test decided), pairs_certified (ours: pairs the certified fast path decided)
+// BM_PenumbraCastingOptimizations: each §3.3 optimization (and area sorting, and the certified fast
+// path of per-pair verdicts) switched off alone at
 // 640 x 480 x 256, `speedup` = time with it off / time with everything on (same run, interleaved),
 // `identical` = 1 when its bits equal the all-on run's.
 // Environment: PENUMBRA_HPC_SCENES (comma list of built-in scenes; default columns,grass),
@@ -397,20 +399,25 @@ void BM_PenumbraCastingVsEmbree(benchmark::State& state, const std::string& name
     state.counters["light_area_scale"] = c.area_scale;
     state.counters["triangles"] = double(geometry(name).indices.size() / 3);
     state.counters["blocked_fraction"] = total_bits > 0 ? double(blocked) / total_bits : 0.0;
-    state.counters["pairs_tested"] = double(ours.stats.pairs_tested);
+    state.counters["pairs_classified"] = double(ours.stats.pairs_classified);  // by the oracle's own test
+    state.counters["pairs_certified"] = double(ours.stats.pairs_certified);    // by the certified fast path
     state.counters["threads"] = threadCount();
     state.SetLabel(name + " " + std::to_string(c.width) + "x" + std::to_string(c.height) + " N=" + std::to_string(c.samples) +
                    (c.area_scale != 1.0 ? " light area x" + std::to_string(int(c.area_scale)) : ""));
 }
 
-const char* const kOptimizationNames[] = {"umbra_bits", "active_planes", "lazy_volumes", "on_demand_masks", "area_sort"};
+const char* const kOptimizationNames[] = {"umbra_bits",      "active_planes", "lazy_volumes",
+                                          "on_demand_masks", "area_sort",     "certified_fast_path"};
+constexpr int kOptimizations = 6;
 
 void BM_PenumbraCastingOptimizations(benchmark::State& state, const std::string& name, int which) {
     const Config c = config(0);
     const Receivers& r = receivers(name, c.width, c.height);
     const penumbra::LightSampleSets sets = lightSamples(name, c.samples, 1.0);
     penumbra::PenumbraCastingOptions off;
-    bool* switches[] = {&off.umbra_bits, &off.active_planes, &off.lazy_volumes, &off.on_demand_masks, &off.area_sort};
+    bool* switches[] = {&off.umbra_bits,      &off.active_planes, &off.lazy_volumes,
+                        &off.on_demand_masks, &off.area_sort,     &off.certified_fast_path};
+    static_assert(sizeof(switches) / sizeof(switches[0]) == kOptimizations, "one switch per name");
     *switches[which] = false;
     penumbra::PenumbraCastingResult all_on, one_off;
     std::vector<double> on_s, off_s;
@@ -451,7 +458,7 @@ const bool kRegistered = [] {
                 ->Iterations(1)
                 ->Unit(benchmark::kMillisecond);
         }
-        for (int which = 0; which < 5; ++which) {
+        for (int which = 0; which < kOptimizations; ++which) {
             const std::string entry = "BM_PenumbraCastingOptimizations/" + name + "/" + kOptimizationNames[which];
             benchmark::RegisterBenchmark(entry.c_str(), BM_PenumbraCastingOptimizations, name, which)
                 ->UseManualTime()

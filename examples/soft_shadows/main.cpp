@@ -1630,7 +1630,9 @@ int runHpc(const Args& args, const penumbra::scene::Scene& scene, const penumbra
         j["mean_visible_fraction"] = receivers.empty() ? 0.0 : lit_sum / double(receivers.size());
         j["hpc"] = {{"triangles_streamed", st.triangles},
                     {"triangles_degenerate", st.triangles_degenerate},
-                    {"pairs_tested", st.pairs_tested},
+                    {"pairs_certified", st.pairs_certified},
+                    {"pairs_classified", st.pairs_classified},
+                    {"coplanar_skips", st.coplanar_skips},
                     {"nodes_visited", st.nodes_visited},
                     {"umbra_skips", st.umbra_skips},
                     {"mask_bytes_peak", st.mask_bytes_peak},
