@@ -469,13 +469,172 @@ TEST_CASE("certified fast path: adversarial receivers near hard-shadow boundarie
             " classified, ", coplanar, " coplanar skips; 0 mismatches");
 }
 
+namespace {
+
+/// Certified verdicts of one scene against detail::oracle::classifySegment of each triangle alone,
+/// along the caster's path: coplanar skip, 4-plane pyramid, else the miss-only pyramid. Receivers
+/// r = offset, offset + stride, ... per triangle. new_misses: misses certified only by the
+/// miss-only pyramid or the backward test (the 2-sided edge tests alone would not).
+struct CertifiedTally {
+    uint64_t hits = 0, misses = 0, new_misses = 0, flat_misses = 0, open = 0, coplanar_pairs = 0, wrong = 0;
+    uint64_t pyramids = 0, miss_pyramids = 0, rejected = 0;
+};
+
+void certifiedVsOracle(const Adversarial& adv, const penumbra::reference::VisibilityOptions& options, size_t stride,
+                       CertifiedTally& tally) {
+    namespace dc = penumbra::detail::casting;
+    namespace oracle = penumbra::detail::oracle;
+    for (size_t t = 0; t < adv.mesh.triangles(); ++t) {
+        dc::TriangleRecord rec;
+        dc::setTriangle(rec, adv.mesh.positions[adv.mesh.indices[3 * t]], adv.mesh.positions[adv.mesh.indices[3 * t + 1]],
+                        adv.mesh.positions[adv.mesh.indices[3 * t + 2]]);
+        for (size_t r = t % stride; r < adv.receivers.size(); r += stride) {
+            const dvec3& p = adv.receivers[r];
+            const dvec3* samples = adv.sets.worldSet(adv.receiver_sets[r]);
+            std::vector<dvec3> set(samples, samples + adv.sets.count());
+            double reach2 = 0.0, reach_inf = 0.0;
+            dc::sampleReach(set, 0.0, p, reach2, reach_inf);  // the samples themselves: tighter than the caster's
+            const bool coplanar = dc::coplanarIgnoredForAll(rec, p, options.coplanar_epsilon);
+            dc::Pyramid py;
+            const bool full = !coplanar && dc::buildPyramid(rec, p, reach2, reach_inf, options.tie_epsilon,
+                                                            options.coplanar_epsilon, py);
+            const bool flat = !coplanar && !full && dc::buildMissPyramid(rec, p, reach2, reach_inf, options.tie_epsilon, py);
+            tally.pyramids += full;
+            tally.miss_pyramids += flat;
+            tally.rejected += !coplanar && !full && !flat;
+            dc::Pyramid two_sided = py;  // the edge-separation misses only
+            two_sided.back_hi = -std::numeric_limits<double>::infinity();
+            for (const dvec3& s : set) {
+                if (p == s) continue;
+                const oracle::Verdict v = oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options));
+                if (coplanar) {
+                    ++tally.coplanar_pairs;
+                    tally.wrong += v.hit || v.fragile;
+                    continue;
+                }
+                if (!full && !flat) continue;
+                double hit = 0.0, miss = 0.0, hit2 = 0.0, miss2 = 0.0;
+                dc::pyramidScores(py, s.x - p.x, s.y - p.y, s.z - p.z, hit, miss);
+                dc::pyramidScores(two_sided, s.x - p.x, s.y - p.y, s.z - p.z, hit2, miss2);
+                tally.wrong += hit > 0.0 && miss > 0.0;
+                tally.wrong += flat && hit > 0.0;
+                if (hit > 0.0) {
+                    ++tally.hits;
+                    tally.wrong += !(v.hit && !v.fragile);
+                } else if (miss > 0.0) {
+                    ++tally.misses;
+                    tally.new_misses += flat || !(miss2 > 0.0);
+                    tally.flat_misses += flat;
+                    tally.wrong += v.hit || v.fragile;
+                } else {
+                    ++tally.open;
+                }
+            }
+        }
+    }
+}
+
+/// A closed octagonal column with a bevelled top (rounded-prism-like: neighbouring faces at
+/// 45 and 22.5 degrees, side quads split in two coplanar triangles) standing on a floor, lit from
+/// the side and above. Receivers on every face, on and within 1e-12 .. 1e-6 (relative) of the
+/// shared edges and vertices, off each face's plane on both sides, and in each face's plane
+/// outside it. Optionally rotated and moved 1e5 away (dyadic coordinates).
+Adversarial prismScene(bool rotate, bool far, uint32_t seed) {
+    const double offset = far ? 1e5 : 0.0;
+    const glm::dmat3 rotation = rotate ? glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.4, glm::normalize(dvec3(-0.2, 1.0, 0.7))))
+                                       : glm::dmat3(1.0);
+    const auto place = [&](const dvec3& x) {
+        dvec3 y = rotation * x;
+        for (int a = 0; a < 3; ++a) y[a] = std::ldexp(std::round(std::ldexp(y[a], 24)), -24) + offset;
+        return y;
+    };
+    Adversarial adv;
+    adv.light.shape = penumbra::LightShape::Rectangle;
+    adv.light.center = dvec3(1.2, 2.6, 0.5);
+    adv.light.axis_z = glm::normalize(dvec3(-1.2, -2.6, -0.5));
+    adv.light.size = dvec3(0.8, 0.5, 0.5);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 32;
+    sample_options.sets = 4;
+    sample_options.seed = seed;
+    adv.sets = penumbra::makeLightSampleSets(adv.light, sample_options);
+    for (dvec3& x : adv.sets.world) x = place(x);
+    adv.sets.frame.center = place(adv.sets.frame.center);
+    adv.sets.frame.rotation = rotation * adv.sets.frame.rotation;
+    adv.light.center = adv.sets.frame.center;
+    adv.light.axis_z = rotation * adv.light.axis_z;
+    std::vector<std::array<dvec3, 3>> tris;
+    const int sides = 8;
+    const auto ring = [&](int i, double radius, double y) {
+        const double a = 2.0 * 3.14159265358979323846 * i / sides;
+        return place(dvec3(radius * std::cos(a), y, radius * std::sin(a)));
+    };
+    const dvec3 top = place(dvec3(0.0, 1.3, 0.0));
+    for (int i = 0; i < sides; ++i) {
+        const int j = (i + 1) % sides;
+        const dvec3 b0 = ring(i, 0.3, 0.0), b1 = ring(j, 0.3, 0.0), m0 = ring(i, 0.3, 1.1), m1 = ring(j, 0.3, 1.1);
+        const dvec3 t0 = ring(i, 0.2, 1.3), t1 = ring(j, 0.2, 1.3);
+        tris.push_back({b0, m0, m1});  // side quad: two coplanar triangles
+        tris.push_back({b0, m1, b1});
+        tris.push_back({m0, t0, t1});  // bevel quad
+        tris.push_back({m0, t1, m1});
+        tris.push_back({t0, top, t1});  // cap fan
+    }
+    const size_t column_triangles = tris.size();
+    tris.push_back({place(dvec3(-3, 0, -3)), place(dvec3(3, 0, -3)), place(dvec3(3, 0, 3))});
+    tris.push_back({place(dvec3(-3, 0, -3)), place(dvec3(3, 0, 3)), place(dvec3(-3, 0, 3))});
+    for (const auto& tri : tris) {
+        for (const dvec3& v : tri) {
+            adv.mesh.indices.push_back(uint32_t(adv.mesh.positions.size()));
+            adv.mesh.positions.push_back(v);
+        }
+    }
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    uint32_t next_set = 0;
+    const auto add = [&](const dvec3& p) {
+        adv.receivers.push_back(p);
+        adv.receiver_sets.push_back(next_set++ % 4);
+    };
+    const double deltas[] = {0.0, 1e-12, -1e-12, 1e-9, -1e-9, 1e-6, -1e-6};
+    for (size_t t = 0; t < column_triangles; ++t) {
+        const auto& tri = tris[t];
+        const dvec3 n = glm::normalize(glm::cross(tri[1] - tri[0], tri[2] - tri[0]));
+        const double size = glm::length(tri[1] - tri[0]);
+        for (int e = 0; e < 3; ++e) {
+            const dvec3 a = tri[e], b = tri[(e + 1) % 3];
+            const dvec3 out = glm::normalize(glm::cross(b - a, n));  // in T's plane, away from T
+            for (double lambda : {0.0, 0.5, 1.0 - 1e-9}) {
+                const dvec3 q = a + lambda * (b - a);
+                for (double delta : deltas) {
+                    add(q + delta * size * n);    // off the plane, at the edge / vertex
+                    add(q + delta * size * out);  // in the plane, across the edge (a neighbour's face)
+                }
+                add(q + 1e-3 * size * out + 1e-9 * size * n);
+            }
+        }
+        for (int i = 0; i < 6; ++i) {
+            double u = unit(rng), v = unit(rng);
+            if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+            const dvec3 q = tri[0] + u * (tri[1] - tri[0]) + v * (tri[2] - tri[0]);
+            add(q);
+            add(q + (i % 2 ? 1e-9 : -1e-7) * size * n);
+        }
+    }
+    for (int i = 0; i < 60; ++i) {  // the floor around the column (coplanar neighbours, its shadow)
+        const double a = 6.283185307179586 * unit(rng), radius = 0.3 + 1.2 * unit(rng) * unit(rng);
+        add(place(dvec3(radius * std::cos(a), 0.0, radius * std::sin(a))));
+    }
+    return adv;
+}
+
+}  // namespace
+
 TEST_CASE("certified fast path: every certified verdict is the oracle's classification of that triangle") {
     // No masking by other triangles: each (T, p, s) the fast path certifies is compared with
     // detail::oracle::classifySegment of T alone. Receivers include offsets around the margins.
-    namespace dc = penumbra::detail::casting;
-    namespace oracle = penumbra::detail::oracle;
     const uint32_t seed = penumbra::test::testSeed(7);
-    uint64_t hits = 0, misses = 0, open = 0, coplanar_pairs = 0, wrong = 0, pyramids = 0, rejected = 0;
+    CertifiedTally tally;
     for (int variant = 0; variant < 3; ++variant) {
         Adversarial adv = adversarialScene(variant >= 1, variant == 2, seed + uint32_t(variant));
         // Extra receivers around the certification margins (2^-26 relative, t error 2^-20).
@@ -494,55 +653,66 @@ TEST_CASE("certified fast path: every certified verdict is the oracle's classifi
             penumbra::reference::VisibilityOptions options;
             options.tie_epsilon = eps.first;
             options.coplanar_epsilon = eps.second;
-            for (size_t t = 0; t < adv.mesh.triangles(); ++t) {
-                dc::TriangleRecord rec;
-                dc::setTriangle(rec, adv.mesh.positions[adv.mesh.indices[3 * t]], adv.mesh.positions[adv.mesh.indices[3 * t + 1]],
-                                adv.mesh.positions[adv.mesh.indices[3 * t + 2]]);
-                for (size_t r = t % 3; r < adv.receivers.size(); r += 3) {  // a third of them: test time
-                    const dvec3& p = adv.receivers[r];
-                    const dvec3* samples = adv.sets.worldSet(adv.receiver_sets[r]);
-                    std::vector<dvec3> set(samples, samples + adv.sets.count());
-                    double reach2 = 0.0, reach_inf = 0.0;
-                    dc::sampleReach(set, 0.0, p, reach2, reach_inf);  // the samples themselves: tighter than the caster's
-                    const bool coplanar = dc::coplanarIgnoredForAll(rec, p, options.coplanar_epsilon);
-                    dc::Pyramid py;
-                    const bool usable = !coplanar && dc::buildPyramid(rec, p, reach2, reach_inf, options.tie_epsilon,
-                                                                     options.coplanar_epsilon, py);
-                    pyramids += usable;
-                    rejected += !coplanar && !usable;
-                    for (const dvec3& s : set) {
-                        if (p == s) continue;
-                        const oracle::Verdict v = oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options));
-                        if (coplanar) {
-                            ++coplanar_pairs;
-                            wrong += v.hit || v.fragile;
-                            continue;
-                        }
-                        if (!usable) continue;
-                        double hit = 0.0, miss = 0.0;
-                        dc::pyramidScores(py, s.x - p.x, s.y - p.y, s.z - p.z, hit, miss);
-                        wrong += hit > 0.0 && miss > 0.0;
-                        if (hit > 0.0) {
-                            ++hits;
-                            wrong += !(v.hit && !v.fragile);
-                        } else if (miss > 0.0) {
-                            ++misses;
-                            wrong += v.hit || v.fragile;
-                        } else {
-                            ++open;
-                        }
-                    }
-                }
-            }
+            certifiedVsOracle(adv, options, 3, tally);  // a third of the receivers per triangle: test time
         }
     }
+    const uint64_t hits = tally.hits, misses = tally.misses, open = tally.open, coplanar_pairs = tally.coplanar_pairs;
+    const uint64_t wrong = tally.wrong, pyramids = tally.pyramids, rejected = tally.rejected;
     CHECK(wrong == 0);
     CHECK(hits > 0);
     CHECK(misses > 0);
     CHECK(coplanar_pairs > 0);
     MESSAGE("certified verdicts vs the oracle per triangle: ", hits, " hits, ", misses, " misses, ", coplanar_pairs,
             " coplanar-ignored, ", open, " left to the oracle, ", wrong, " wrong; pyramids ", pyramids, ", unusable ",
-            rejected);
+            rejected, "; misses by the miss-only pyramid ", tally.flat_misses, ", by the backward test ",
+            tally.new_misses - tally.flat_misses);
+}
+
+TEST_CASE("certified fast path: closed column, receivers on shared edges / vertices and near neighbouring planes") {
+    // Receivers on a face adjacent to T (shared edge or vertex), within 1e-12 .. 1e-6 of T's plane
+    // or of its edges' lines, in T's plane outside T: the ill-conditioned pyramids (miss-only
+    // pyramid) and the backward crossings of convex neighbours. Per triangle against
+    // classifySegment, and the whole cast against the oracle and the slow path.
+    const uint32_t seed = penumbra::test::testSeed(8);
+    CertifiedTally tally;
+    uint64_t certified = 0, classified = 0, pairs = 0;
+    for (int variant = 0; variant < 2; ++variant) {
+        const Adversarial adv = prismScene(variant == 1, variant == 1, seed + uint32_t(variant));
+        const penumbra::reference::VisibilityOracle oracle(adv.mesh.positions, adv.mesh.indices);
+        for (const auto& eps : {std::pair<double, double>{1e-9, 1e-9}, {0.0, 0.0}}) {
+            INFO("variant " << variant << " tie_epsilon " << eps.first << " coplanar_epsilon " << eps.second);
+            penumbra::PenumbraCastingOptions options;
+            options.oracle.tie_epsilon = eps.first;
+            options.oracle.coplanar_epsilon = eps.second;
+            options.threads = 2;
+            const uint64_t wrong_before = tally.wrong;
+            certifiedVsOracle(adv, options.oracle, 3, tally);  // a third of the receivers per triangle: test time
+            CHECK(tally.wrong == wrong_before);
+            const penumbra::PenumbraCastingResult fast = cast(adv.mesh, adv.receivers, adv.light, adv.sets, options, adv.receiver_sets);
+            options.certified_fast_path = false;
+            const penumbra::PenumbraCastingResult slow = cast(adv.mesh, adv.receivers, adv.light, adv.sets, options, adv.receiver_sets);
+            const penumbra::reference::VisibilityResult truth =
+                oracleTruth(oracle, adv.receivers, adv.receiver_sets, adv.sets, options.oracle);
+            const Tally t = compare(fast, truth);
+            CHECK(t.mismatched == 0);
+            CHECK(t.tie_mismatched == 0);
+            CHECK(fast.blocked == slow.blocked);
+            CHECK(fast.ties == slow.ties);
+            certified += fast.stats.pairs_certified;
+            classified += fast.stats.pairs_classified;
+            pairs += t.pairs;
+        }
+    }
+    CHECK(tally.wrong == 0);
+    CHECK(tally.miss_pyramids > 0);
+    CHECK(tally.flat_misses > 0);
+    CHECK(tally.new_misses > tally.flat_misses);
+    CHECK(tally.hits > 0);
+    MESSAGE("column: ", pairs, " pairs cast, ", certified, " certified, ", classified, " classified; per triangle ",
+            tally.hits, " hits, ", tally.misses, " misses (", tally.flat_misses, " by the miss-only pyramid, ",
+            tally.new_misses - tally.flat_misses, " backward), ", tally.open, " open, ", tally.coplanar_pairs,
+            " coplanar-ignored; pyramids ", tally.pyramids, ", miss-only ", tally.miss_pyramids, ", unusable ",
+            tally.rejected, "; ", tally.wrong, " wrong");
 }
 
 TEST_CASE("on-demand masks: peak bytes below R * N / 8 with many unshadowed receivers") {
