@@ -331,6 +331,14 @@ namespace {
 /// behind T (t near 0) and on T's plane, a triangle nearly edge-on to the light, one close to the
 /// light (t near 1), a floor the receivers lie on; optionally rotated and moved 1e5 away with
 /// dyadic coordinates. Returns the mesh, the receivers, their sets and the sample sets.
+/// x rotated, rounded to a multiple of 2^-24 (dyadic), then offset: the translation is exact, so
+/// the far-from-origin variants see the same geometry.
+dvec3 dyadicPlace(const glm::dmat3& rotation, double offset, const dvec3& x) {
+    dvec3 y = rotation * x;
+    for (int a = 0; a < 3; ++a) y[a] = std::ldexp(std::round(std::ldexp(y[a], 24)), -24) + offset;
+    return y;
+}
+
 struct Adversarial {
     Mesh mesh;
     std::vector<dvec3> receivers;
@@ -343,12 +351,7 @@ Adversarial adversarialScene(bool rotate, bool far, uint32_t seed) {
     const double offset = far ? 1e5 : 0.0;
     const glm::dmat3 rotation = rotate ? glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.7, glm::normalize(dvec3(0.3, 1.0, -0.5))))
                                        : glm::dmat3(1.0);
-    // Dyadic (multiples of 2^-24) before the offset, so that the translation is exact.
-    const auto place = [&](const dvec3& x) {
-        dvec3 y = rotation * x;
-        for (int a = 0; a < 3; ++a) y[a] = std::ldexp(std::round(std::ldexp(y[a], 24)), -24) + offset;
-        return y;
-    };
+    const auto place = [&](const dvec3& x) { return dyadicPlace(rotation, offset, x); };
     Adversarial adv;
     adv.light.shape = penumbra::LightShape::Disk;
     adv.light.center = dvec3(0.0, 3.0, 0.0);
@@ -543,11 +546,7 @@ Adversarial prismScene(bool rotate, bool far, uint32_t seed) {
     const double offset = far ? 1e5 : 0.0;
     const glm::dmat3 rotation = rotate ? glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.4, glm::normalize(dvec3(-0.2, 1.0, 0.7))))
                                        : glm::dmat3(1.0);
-    const auto place = [&](const dvec3& x) {
-        dvec3 y = rotation * x;
-        for (int a = 0; a < 3; ++a) y[a] = std::ldexp(std::round(std::ldexp(y[a], 24)), -24) + offset;
-        return y;
-    };
+    const auto place = [&](const dvec3& x) { return dyadicPlace(rotation, offset, x); };
     Adversarial adv;
     adv.light.shape = penumbra::LightShape::Rectangle;
     adv.light.center = dvec3(1.2, 2.6, 0.5);

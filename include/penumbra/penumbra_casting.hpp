@@ -678,19 +678,34 @@ inline void sampleReach(const std::vector<glm::dvec3>& vertices, double slack, c
 /// Builds the shadow pyramid of T from p, or false when it is ill-conditioned (p near T's plane
 /// or near the line of an edge): those pairs take the oracle path. reach2 / reach_inf: upper
 /// bounds of |s - p|_2 and |s - p|_inf over every sample.
+/// T's vertices relative to p, upper bounds of their lengths, and S >= the oracle's scale of
+/// every pair (p, s): what both pyramids measure their margins against.
+struct PyramidFrame {
+    glm::dvec3 w[3];
+    double w_len[3];
+    double scale;
+};
+
+inline PyramidFrame pyramidFrame(const TriangleRecord& rec, const glm::dvec3& p, double reach_inf) {
+    PyramidFrame f;
+    double w_inf = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        f.w[i] = rec.v[i] - p;
+        f.w_len[i] = glm::length(f.w[i]) * kUp;
+        w_inf = std::max(w_inf, maxAbs3(f.w[i]));
+    }
+    f.scale = std::max(w_inf, reach_inf) * kUp;
+    return f;
+}
+
 inline bool buildPyramid(const TriangleRecord& rec, const glm::dvec3& p, double reach2, double reach_inf, double eps,
                          double cop, Pyramid& py) {
     py.back_hi = -std::numeric_limits<double>::infinity();
     if (!rec.normal_ok) return false;
-    const glm::dvec3 w[3] = {rec.v[0] - p, rec.v[1] - p, rec.v[2] - p};
-    double w_len[3];
-    double w_inf = 0.0;
-    for (int i = 0; i < 3; ++i) {
-        w_len[i] = glm::length(w[i]) * kUp;
-        w_inf = std::max(w_inf, maxAbs3(w[i]));
-    }
-    // S >= the oracle's scale of every pair (p, s); every margin below is measured against it.
-    const double scale = std::max(w_inf, reach_inf) * kUp;
+    const PyramidFrame frame = pyramidFrame(rec, p, reach_inf);
+    const glm::dvec3* w = frame.w;
+    const double* w_len = frame.w_len;
+    const double scale = frame.scale;  // every margin below is measured against it
     glm::dvec3 nt = rec.normal;
     double hp = glm::dot(nt, w[0]);
     if (hp < 0.0) {
@@ -764,14 +779,10 @@ inline bool buildPyramid(const TriangleRecord& rec, const glm::dvec3& p, double 
 inline bool buildMissPyramid(const TriangleRecord& rec, const glm::dvec3& p, double reach2, double reach_inf, double eps,
                              Pyramid& py) {
     if (!rec.normal_ok) return false;
-    const glm::dvec3 w[3] = {rec.v[0] - p, rec.v[1] - p, rec.v[2] - p};
-    double w_len[3];
-    double w_inf = 0.0;
-    for (int i = 0; i < 3; ++i) {
-        w_len[i] = glm::length(w[i]) * kUp;
-        w_inf = std::max(w_inf, maxAbs3(w[i]));
-    }
-    const double scale = std::max(w_inf, reach_inf) * kUp;
+    const PyramidFrame frame = pyramidFrame(rec, p, reach_inf);
+    const glm::dvec3* w = frame.w;
+    const double* w_len = frame.w_len;
+    const double scale = frame.scale;
     const double m_miss = (eps * kUp + kMissMargin) * scale * kUp;
     bool any = false;
     for (int e = 0; e < 3; ++e) {
