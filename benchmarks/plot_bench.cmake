@@ -1,7 +1,7 @@
 # ctest plot_bench: a tiny smoke run of the soft-shadow benchmarks as JSON, then tools/plot_bench.py
 # on it; fails unless the PNG is written. Skipped (SKIP_REGULAR_EXPRESSION "matplotlib is missing")
 # where Debian's python3-matplotlib is not installed.
-# cmake -DBENCH=<penumbra_bench_soft> -DPYTHON=/usr/bin/python3 -DSCRIPT=<tools/plot_bench.py>
+# cmake -DBENCH=<penumbra_bench or penumbra_bench_soft> -DPYTHON=/usr/bin/python3 -DSCRIPT=<tools/plot_bench.py>
 #       -DFILTER=<regex> -DOUT=<prefix: OUT.json, OUT.png> -P plot_bench.cmake
 foreach(var BENCH PYTHON SCRIPT FILTER OUT)
     if(NOT DEFINED ${var})
