@@ -4,6 +4,7 @@
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
 #include <penumbra/bent_normals.hpp>
 #include <penumbra/buffer_range.hpp>
+#include <penumbra/deep_shadow_map.hpp>
 #include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
 #include <penumbra/light_samples.hpp>
@@ -12,6 +13,7 @@
 #include <penumbra/pipelines/sample_based_soft.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
+#include <penumbra/reference/transmittance.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/sample_lists.hpp>
 #include <penumbra/scan.hpp>

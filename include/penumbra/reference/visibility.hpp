@@ -207,6 +207,7 @@ struct Node {
 struct Verdict {
     bool hit = false;
     bool fragile = false;
+    double t = 0;  // the crossing's ray parameter when the line passes through T (reference/transmittance.hpp sorts by it)
 };
 
 struct Counters {
@@ -401,6 +402,7 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
         const double t = (mul(u, az) + mul(v, bz) + mul(w, cz)) / det;
         verdict.hit = t > 0.0 && t < 1.0;
         verdict.fragile = std::fabs(t) <= eps || std::fabs(t - 1.0) <= eps;
+        verdict.t = t;
     }
     if (!verdict.fragile) {
         verdict.fragile = nearEdge(bx, by, bz, cx, cy, cz, u, rho, eps) || nearEdge(cx, cy, cz, ax, ay, az, v, rho, eps) ||

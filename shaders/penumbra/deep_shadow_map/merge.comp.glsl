@@ -1,0 +1,200 @@
+// penumbra — deep shadow map build: the merge of one texel's sub-sample functions (lokovic2000 §5.1)
+// streamed into the compressor (§3.3); the twin of detail::dsmMergeTexel + DsmCompressor. A binary
+// heap over the contributing sub-sample lists keyed by (depth, list); each event subtracts the
+// sub-sample's old contribution, V -= (w_j T_j) alpha, T_j *= 1 - alpha; one vertical step per
+// distinct depth. PENUMBRA_DSM_PASS 0 writes the texel's compressed vertex count (scanned next into
+// the level's offsets), 1 writes the vertices. One invocation per texel.
+// penumbra-permutation: PENUMBRA_DSM_PASS=0 PENUMBRA_DSM_CHANNELS=1 PENUMBRA_DSM_MERGE_LISTS=16
+// penumbra-permutation: PENUMBRA_DSM_PASS=1 PENUMBRA_DSM_CHANNELS=3 PENUMBRA_DSM_MERGE_LISTS=144
+#include "penumbra/deep_shadow_map/deep_shadow_map_shared.h"
+#include "penumbra/deep_shadow_map/deep_shadow_map.glsl"
+
+#ifndef PENUMBRA_DSM_PASS
+#error penumbra/deep_shadow_map/merge.comp.glsl needs PENUMBRA_DSM_PASS (0 count, 1 write)
+#endif
+#ifndef PENUMBRA_DSM_CHANNELS
+#define PENUMBRA_DSM_CHANNELS 1
+#endif
+#ifndef PENUMBRA_DSM_MERGE_LISTS
+#error penumbra/deep_shadow_map/merge.comp.glsl needs PENUMBRA_DSM_MERGE_LISTS ((2 reach + 1)^2 S, DsmSetup::merge_lists)
+#endif
+#if PENUMBRA_DSM_CHANNELS == 3
+#define PENUMBRA_DSM_STRIDE 2u
+#else
+#define PENUMBRA_DSM_STRIDE 1u
+#endif
+
+layout(local_size_x = PENUMBRA_DSM_GROUP_SIZE) in;
+layout(std140, binding = PENUMBRA_DSM_BINDING_PARAMS) uniform PenumbraDsmParamsBlock { PenumbraDsmParams penumbraDsmParams; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_PATTERNS) readonly buffer PenumbraDsmPatterns { vec2 penumbraDsmPatterns[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_COUNTS) readonly buffer PenumbraDsmOffsets { uint penumbraDsmOffsets[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_RECORDS) readonly buffer PenumbraDsmRecords { uvec4 penumbraDsmRecords[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_STATUS) buffer PenumbraDsmStatus { uint penumbraDsmStatus[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_OFFSETS) buffer PenumbraDsmMapOffsets { uint penumbraDsmMapOffsets[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) writeonly buffer PenumbraDsmMapVertices { float penumbraDsmMapVertices[]; };
+
+uint penumbraDsmOut = 0u;  // write pass: the texel's first vertex (floats / (1 + C))
+
+#if PENUMBRA_DSM_PASS == 1
+void penumbraDsmStore(uint index, float z, float v[PENUMBRA_DSM_CHANNELS]) {
+    uint vertex = penumbraDsmOut + index;
+    if (vertex >= penumbraDsmParams.capacity.y) {
+        atomicAdd(penumbraDsmStatus[PENUMBRA_DSM_STATUS_VERTEX_OVERFLOW], 1u);
+        return;
+    }
+    uint f = vertex * uint(1 + PENUMBRA_DSM_CHANNELS);
+    penumbraDsmMapVertices[f] = z;
+    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) penumbraDsmMapVertices[f + 1u + uint(c)] = v[c];
+}
+#define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) penumbraDsmStore(index, z, v)
+#else
+#define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v)
+#endif
+#include "penumbra/deep_shadow_map/compress.glsl"
+
+uint penumbraDsmCur[PENUMBRA_DSM_MERGE_LISTS];
+uint penumbraDsmEnd[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmW[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmT[PENUMBRA_DSM_MERGE_LISTS * PENUMBRA_DSM_CHANNELS];
+uint penumbraDsmHeap[PENUMBRA_DSM_MERGE_LISTS];
+uint penumbraDsmHeapSize = 0u;
+
+float penumbraDsmZ(uint list) { return uintBitsToFloat(penumbraDsmRecords[penumbraDsmCur[list] * PENUMBRA_DSM_STRIDE].x); }
+
+bool penumbraDsmLess(uint a, uint b) {
+    float za = penumbraDsmZ(a), zb = penumbraDsmZ(b);
+    return za < zb || (za == zb && a < b);
+}
+
+void penumbraDsmSiftDown(uint i) {
+    for (;;) {
+        uint m = i, l = 2u * i + 1u, r = l + 1u;
+        if (l < penumbraDsmHeapSize && penumbraDsmLess(penumbraDsmHeap[l], penumbraDsmHeap[m])) m = l;
+        if (r < penumbraDsmHeapSize && penumbraDsmLess(penumbraDsmHeap[r], penumbraDsmHeap[m])) m = r;
+        if (m == i) return;
+        uint t = penumbraDsmHeap[i];
+        penumbraDsmHeap[i] = penumbraDsmHeap[m];
+        penumbraDsmHeap[m] = t;
+        i = m;
+    }
+}
+
+void penumbraDsmStep(float z, float before[PENUMBRA_DSM_CHANNELS], float v[PENUMBRA_DSM_CHANNELS]) {
+    bool step = false;
+    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) step = step || v[c] != before[c];
+    if (step) {
+        penumbraDsmCompressAdd(z, before);
+        penumbraDsmCompressAdd(z, v);
+    }
+}
+
+void main() {
+    int R = int(penumbraDsmParams.size.x);
+    uint S = penumbraDsmParams.size.y;
+    uint texel = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    if (texel >= uint(R * R)) return;
+    int x = int(texel % uint(R)), y = int(texel / uint(R));
+    int reach = int(penumbraDsmParams.filtering.y);
+    float radius = penumbraDsmParams.numbers.y, inv_r2 = penumbraDsmParams.numbers.z;
+    bool box = penumbraDsmParams.filtering.x == uint(PENUMBRA_DSM_FILTER_BOX);
+    uint cap = penumbraDsmParams.capacity.x;
+    uint gauss = uint(PENUMBRA_DSM_PATTERNS) * S;  // the Gaussian table follows the patterns
+    uint n = 0u;
+    float total = 0.0;
+    for (int dy = -reach; dy <= reach; ++dy)
+        for (int dx = -reach; dx <= reach; ++dx) {
+            int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= R || ny >= R) continue;
+            uint pattern = penumbraDsmPattern(uint(nx), uint(ny));
+            for (uint j = 0u; j < S; ++j) {
+                vec2 o = penumbraDsmPatterns[pattern * S + j];
+                precise float rx = (float(dx) + o.x) - 0.5;
+                precise float ry = (float(dy) + o.y) - 0.5;
+                float w;
+                if (box) {
+                    if (!(abs(rx) <= radius && abs(ry) <= radius)) continue;
+                    w = 1.0;
+                } else {
+                    precise float q = (rx * rx + ry * ry) * inv_r2;
+                    if (!(q <= 1.0)) continue;
+                    precise float qi = q * float(PENUMBRA_DSM_GAUSS_TABLE);
+                    w = penumbraDsmPatterns[gauss + min(uint(PENUMBRA_DSM_GAUSS_TABLE) - 1u, uint(qi))].x;
+                }
+                precise float t = total + w;
+                total = t;
+                uint k = (uint(ny) * uint(R) + uint(nx)) * S + j;
+                penumbraDsmCur[n] = min(penumbraDsmOffsets[k], cap);
+                penumbraDsmEnd[n] = min(penumbraDsmOffsets[k + 1u], cap);
+                penumbraDsmW[n] = w;
+                for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) penumbraDsmT[n * uint(PENUMBRA_DSM_CHANNELS) + uint(c)] = 1.0;
+                ++n;
+            }
+        }
+    penumbraDsmCompressBegin(penumbraDsmParams.numbers.w);
+#if PENUMBRA_DSM_PASS == 1
+    penumbraDsmOut = penumbraDsmMapOffsets[texel];
+#endif
+    if (n > 0u) {
+        for (uint i = 0u; i < n; ++i) {
+            precise float wn = penumbraDsmW[i] / total;
+            penumbraDsmW[i] = wn;
+        }
+        penumbraDsmHeapSize = 0u;
+        for (uint i = 0u; i < n; ++i)
+            if (penumbraDsmCur[i] < penumbraDsmEnd[i]) penumbraDsmHeap[penumbraDsmHeapSize++] = i;
+        for (uint i = penumbraDsmHeapSize / 2u; i-- > 0u;) penumbraDsmSiftDown(i);
+        float v[PENUMBRA_DSM_CHANNELS], before[PENUMBRA_DSM_CHANNELS];
+        for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+            v[c] = 1.0;
+            before[c] = 1.0;
+        }
+        bool pending = false;
+        float z_group = 0.0;
+        while (penumbraDsmHeapSize > 0u) {
+            uint li = penumbraDsmHeap[0];
+            uint rec = penumbraDsmCur[li] * PENUMBRA_DSM_STRIDE;
+            uvec4 r0 = penumbraDsmRecords[rec];
+            float z = uintBitsToFloat(r0.x);
+            vec3 alpha;
+#if PENUMBRA_DSM_CHANNELS == 3
+            alpha = vec3(uintBitsToFloat(r0.z), uintBitsToFloat(r0.w), uintBitsToFloat(penumbraDsmRecords[rec + 1u].x));
+#else
+            alpha = vec3(uintBitsToFloat(r0.z), 0.0, 0.0);
+#endif
+            if (pending && z != z_group) {
+                penumbraDsmStep(z_group, before, v);
+                pending = false;
+            }
+            if (!pending) {
+                pending = true;
+                z_group = z;
+                for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) before[c] = v[c];
+            }
+            bool alive = false;
+            for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+                uint ti = li * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+                float a = alpha[c];
+                precise float wt = penumbraDsmW[li] * penumbraDsmT[ti];
+                precise float nv = v[c] - wt * a;
+                v[c] = max(0.0, nv);
+                precise float nt = penumbraDsmT[ti] * (1.0 - a);
+                penumbraDsmT[ti] = nt;
+                alive = alive || nt > 0.0;
+            }
+            penumbraDsmCur[li]++;
+            if (penumbraDsmCur[li] < penumbraDsmEnd[li] && alive) {
+                penumbraDsmSiftDown(0u);
+            } else {
+                penumbraDsmHeap[0] = penumbraDsmHeap[penumbraDsmHeapSize - 1u];
+                penumbraDsmHeapSize--;
+                if (penumbraDsmHeapSize > 0u) penumbraDsmSiftDown(0u);
+            }
+        }
+        if (pending) penumbraDsmStep(z_group, before, v);
+    }
+    penumbraDsmCompressFinish();
+#if PENUMBRA_DSM_PASS == 0
+    penumbraDsmMapOffsets[texel] = penumbraDsmCCount;
+    if (texel == 0u) penumbraDsmMapOffsets[uint(R * R)] = 0u;
+#endif
+}

@@ -1,0 +1,278 @@
+// Deep shadow maps on the GPU (penumbra/gl/deep_shadow_map.hpp) against the CPU twin
+// (penumbra/deep_shadow_map.hpp): the sorted fragment lists, every level's offsets and vertices,
+// and batch lookups, bit for bit on drivers with correctly rounded float32 (the bitwise tier:
+// llvmpipe). The portable tier asserts what any driver must reproduce: no overflow, every GPU
+// function non-increasing, the same fragment count per list within 0.1%, and every GPU texel
+// within 2 eps + 1e-3 of the CPU twin's. Scenes: small hairball and grass (built in), grey,
+// coloured, per-triangle and per-vertex opacity, box and Gaussian filters, the full mip chain.
+#include <penumbra/deep_shadow_map.hpp>
+#include <penumbra/gl/deep_shadow_map.hpp>
+#include <penumbra/gl/objects.hpp>
+#include <penumbra/scene/scene.hpp>
+
+#include "support/gl_test_support.hpp"
+#include "support/test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+namespace {
+
+using penumbra::DsmFragmentsCpu;
+using penumbra::DsmLight;
+using penumbra::DsmMapCpu;
+using penumbra::DsmOpacity;
+using penumbra::DsmOptions;
+
+uint32_t bits(float f) {
+    uint32_t b;
+    std::memcpy(&b, &f, 4);
+    return b;
+}
+
+struct Casters {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+};
+
+Casters objects(const penumbra::scene::Scene& scene) {
+    Casters c;
+    for (const auto& mesh : scene.meshes) {
+        if (mesh.name == "ground") continue;
+        const uint32_t base = static_cast<uint32_t>(c.positions.size());
+        c.positions.insert(c.positions.end(), mesh.positions.begin(), mesh.positions.end());
+        for (uint32_t i : mesh.indices) c.indices.push_back(base + i);
+    }
+    return c;
+}
+
+DsmLight lightFor(const Casters& c) {
+    penumbra::scene::Bounds b;
+    for (const auto& p : c.positions) b.extend(p);
+    const glm::vec3 centre = b.center();
+    const float radius = 0.5f * glm::length(b.size());
+    const glm::vec3 eye = centre + glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)) * (3.0f * radius);
+    const float dist = glm::length(eye - centre);
+    DsmLight light;
+    light.view = glm::lookAt(eye, centre, glm::vec3(0.0f, 0.0f, 1.0f));
+    light.projection = glm::perspective(2.0f * std::asin(radius / dist), 1.0f, dist - 1.1f * radius, dist + 1.1f * radius);
+    return light;
+}
+
+struct Run {
+    DsmFragmentsCpu gpu_fragments;
+    DsmMapCpu gpu_map;
+    penumbra::gl::DsmStatus status;
+};
+
+Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c,
+           penumbra::gl::DsmCapacity capacity = {}) {
+    penumbra::gl::DeepShadowMapBuilder builder(setup, capacity);
+    penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(c.positions);
+    penumbra::gl::Buffer indices = penumbra::gl::Buffer::fromVector(c.indices);
+    penumbra::gl::Buffer vertex_opacity = penumbra::gl::Buffer::fromVector(opacity.per_vertex);
+    std::vector<glm::vec4> tri;
+    for (const auto& a : opacity.per_triangle) tri.emplace_back(a, 0.0f);
+    penumbra::gl::Buffer triangle_opacity = penumbra::gl::Buffer::fromVector(tri);
+    penumbra::gl::DsmCasterBuffers casters;
+    casters.positions = {positions.id(), 0, positions.size()};
+    casters.indices = {indices.id(), 0, indices.size()};
+    casters.index_count = static_cast<uint32_t>(c.indices.size());
+    if (!opacity.per_vertex.empty()) casters.vertex_opacity = {vertex_opacity.id(), 0, vertex_opacity.size()};
+    if (!opacity.per_triangle.empty()) casters.triangle_opacity = {triangle_opacity.id(), 0, triangle_opacity.size()};
+    // Poison the outputs first: nothing may survive from before the build.
+    const uint32_t poison = 0xDEADBEEFu;
+    glClearNamedBufferData(builder.vertices().buffer, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
+    glClearNamedBufferData(builder.offsets().buffer, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
+    builder.build(light, opacity, casters);
+    glFinish();
+    REQUIRE(glGetError() == GL_NO_ERROR);
+    Run r;
+    r.status = builder.readStatus();
+    r.gpu_fragments = builder.readFragments();
+    r.gpu_map = builder.readMap();
+    return r;
+}
+
+void compareRun(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c) {
+    const DsmFragmentsCpu cpu_fragments = penumbra::buildDsmFragmentsCpu(setup, light, c.positions, c.indices, opacity);
+    const DsmMapCpu cpu_map = penumbra::buildDsmMapCpu(setup, cpu_fragments, true);
+    const Run gpu = runGpu(setup, light, opacity, c);
+    CHECK(gpu.status.fragment_overflow == 0);
+    CHECK(gpu.status.vertex_overflow == 0);
+    CHECK(gpu.status.fragments == cpu_fragments.fragments.size());
+    MESSAGE("fragments ", cpu_fragments.fragments.size(), ", level-0 vertices ", cpu_map.vertexCount(0), " (GPU ",
+            gpu.gpu_map.vertexCount(0), ")");
+
+    // Fragments: same list lengths (portable: within 0.1% of the total), identical records (bitwise).
+    uint64_t list_mismatch = 0;
+    for (size_t k = 0; k + 1 < cpu_fragments.offsets.size(); ++k)
+        list_mismatch += (cpu_fragments.offsets[k + 1] - cpu_fragments.offsets[k]) !=
+                         (gpu.gpu_fragments.offsets[k + 1] - gpu.gpu_fragments.offsets[k]);
+    CHECK(list_mismatch <= cpu_fragments.fragments.size() / 1000);
+    PENUMBRA_CHECK_BITWISE("deep shadow map: sorted fragment lists == buildDsmFragmentsCpu", list_mismatch == 0);
+    if (list_mismatch == 0 && gpu.gpu_fragments.fragments.size() == cpu_fragments.fragments.size()) {
+        uint64_t record_mismatch = 0;
+        for (size_t i = 0; i < cpu_fragments.fragments.size(); ++i) {
+            const auto& a = cpu_fragments.fragments[i];
+            const auto& b = gpu.gpu_fragments.fragments[i];
+            bool same = bits(a.z) == bits(b.z) && a.triangle == b.triangle && bits(a.alpha.x) == bits(b.alpha.x);
+            if (setup.channels == 3) same = same && bits(a.alpha.y) == bits(b.alpha.y) && bits(a.alpha.z) == bits(b.alpha.z);
+            record_mismatch += !same;
+        }
+        PENUMBRA_CHECK_BITWISE("deep shadow map: fragment records (depth, triangle, opacity) == the twin's", record_mismatch == 0);
+    }
+
+    // Every level: offsets and vertices bit for bit; portable: monotone, within 2 eps + 1e-3.
+    const uint32_t F = setup.vertexFloats();
+    for (uint32_t l = 0; l < setup.levels; ++l) {
+        CAPTURE(l);
+        const auto& co = cpu_map.offsets[l];
+        const auto& go = gpu.gpu_map.offsets[l];
+        REQUIRE(co.size() == go.size());
+        uint64_t offset_mismatch = 0, vertex_mismatch = 0, not_monotone = 0;
+        double worst = 0.0;
+        for (size_t t = 0; t + 1 < co.size(); ++t) {
+            const uint32_t ca = co[t], cn = co[t + 1] - co[t], ga = go[t], gn = go[t + 1] - go[t];
+            offset_mismatch += ca != ga || cn != gn;
+            const float* cv = cpu_map.vertices[l].data() + size_t(F) * ca;
+            const float* gv = gpu.gpu_map.vertices[l].data() + size_t(F) * ga;
+            if (cn == gn)
+                for (uint32_t i = 0; i < F * cn; ++i) vertex_mismatch += bits(cv[i]) != bits(gv[i]);
+            not_monotone += !penumbra::dsmMonotone(gv, gn, setup.channels);
+            worst = std::max(worst, penumbra::dsmFunctionDistance(cv, cn, gv, gn, setup.channels));
+        }
+        CHECK(not_monotone == 0);
+        CHECK(worst <= 2.0 * setup.tolerance + 1e-3);
+        PENUMBRA_CHECK_BITWISE("deep shadow map: every level's offsets == buildDsmMapCpu", offset_mismatch == 0);
+        PENUMBRA_CHECK_BITWISE("deep shadow map: every level's vertices == buildDsmMapCpu", vertex_mismatch == 0);
+    }
+}
+
+}  // namespace
+
+TEST_CASE("GPU deep shadow map == CPU twin: hairball, grey opacity, box filter, full mip chain") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(1500, 3, false));
+    DsmOptions o;
+    o.resolution = 32;
+    o.samples = 16;
+    o.levels = 0;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    DsmOpacity op;
+    op.mesh = glm::vec3(0.5f);
+    compareRun(setup, lightFor(c), op, c);
+}
+
+TEST_CASE("GPU deep shadow map == CPU twin: grass, colour per triangle, Gaussian radius 1, S = 9") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::grass(150, 2, false));
+    DsmOptions o;
+    o.resolution = 32;
+    o.samples = 9;
+    o.channels = 3;
+    o.filter = penumbra::DsmFilter::Gaussian;
+    o.filter_radius = 1.0f;
+    o.levels = 3;
+    o.tolerance = 1.0f / 32.0f;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    DsmOpacity op;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (size_t t = 0; t < c.indices.size() / 3; ++t) op.per_triangle.emplace_back(u(rng), u(rng), u(rng));
+    compareRun(setup, lightFor(c), op, c);
+}
+
+TEST_CASE("GPU deep shadow map == CPU twin: per-vertex opacity, S = 1, odd resolution, one level") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(600, 5, false));
+    DsmOptions o;
+    o.resolution = 37;
+    o.samples = 1;
+    o.tolerance = 0.01f;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    DsmOpacity op;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (size_t v = 0; v < c.positions.size(); ++v) {
+        const float a = u(rng);
+        op.per_vertex.emplace_back(a, a, a);
+    }
+    compareRun(setup, lightFor(c), op, c);
+}
+
+TEST_CASE("GPU deep shadow map lookups == dsmLookup (bilinear, trilinear, border)") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(1000, 9, false));
+    DsmOptions o;
+    o.resolution = 16;
+    o.samples = 16;
+    o.levels = 0;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    const DsmLight light = lightFor(c);
+    DsmOpacity op;
+    op.mesh = glm::vec3(0.6f);
+    penumbra::gl::DeepShadowMapBuilder builder(setup);
+    penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(c.positions);
+    penumbra::gl::Buffer indices = penumbra::gl::Buffer::fromVector(c.indices);
+    penumbra::gl::DsmCasterBuffers casters;
+    casters.positions = {positions.id(), 0, positions.size()};
+    casters.indices = {indices.id(), 0, indices.size()};
+    casters.index_count = static_cast<uint32_t>(c.indices.size());
+    builder.build(light, op, casters);
+    const DsmMapCpu map = builder.readMap();
+    // Queries: depths spread over the casters' range, (u, v) over the map and past its border.
+    float zmin = 1e30f, zmax = -1e30f;
+    for (const auto& p : c.positions) {
+        const float d = penumbra::dsmCoord(builder.params(), p).depth;
+        zmin = std::min(zmin, d), zmax = std::max(zmax, d);
+    }
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> uv(-0.1f, 1.1f), z(zmin, zmax), lod(-1.0f, 6.0f);
+    std::vector<glm::vec4> queries(4096);
+    for (auto& q : queries) q = glm::vec4(uv(rng), uv(rng), z(rng), lod(rng));
+    queries[0] = glm::vec4(0.5f, 0.5f, zmax, 0.0f);
+    penumbra::gl::Buffer qb = penumbra::gl::Buffer::fromVector(queries);
+    penumbra::gl::Buffer rb(queries.size() * 16);
+    builder.lookup({qb.id(), 0, qb.size()}, {rb.id(), 0, rb.size()}, static_cast<uint32_t>(queries.size()));
+    std::vector<glm::vec4> results(queries.size());
+    glGetNamedBufferSubData(rb.id(), 0, static_cast<GLsizeiptr>(rb.size()), results.data());
+    uint64_t mismatch = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < queries.size(); ++i) {
+        const auto& q = queries[i];
+        const float cpu = penumbra::dsmLookup(map, q.x, q.y, q.z, q.w);
+        mismatch += bits(cpu) != bits(results[i].x);
+        worst = std::max(worst, std::fabs(double(cpu) - results[i].x));
+    }
+    MESSAGE("lookups: ", mismatch, " of ", queries.size(), " differ in bits, worst ", worst);
+    CHECK(worst <= 1e-4);
+    PENUMBRA_CHECK_BITWISE("deep shadow map: lookup.glsl == dsmLookup", mismatch == 0);
+}
+
+TEST_CASE("GPU deep shadow map: a fragment capacity too small is counted, never written past") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(800, 4, false));
+    DsmOptions o;
+    o.resolution = 16;
+    o.samples = 4;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    penumbra::gl::DsmCapacity capacity;
+    capacity.fragments = 64;
+    capacity.vertices = 64;
+    DsmOpacity op;
+    op.mesh = glm::vec3(0.5f);
+    const Run r = runGpu(setup, lightFor(c), op, c, capacity);
+    CHECK(r.status.fragments > 64);
+    CHECK(r.status.fragment_overflow == r.status.fragments - 64);
+    CHECK(r.status.vertex_overflow > 0);
+    CHECK_THROWS_WITH_AS(penumbra::gl::DeepShadowMapBuilder(setup, {0, 16}), doctest::Contains("fragment capacity 0"),
+                         penumbra::Error);
+}
