@@ -73,7 +73,7 @@ struct Run {
 };
 
 Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c,
-           penumbra::gl::DsmCapacity capacity = {}) {
+           penumbra::gl::DsmCapacity capacity = {}, const penumbra::DsmMedium& medium = {}) {
     penumbra::gl::DeepShadowMapBuilder builder(setup, capacity);
     penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(c.positions);
     penumbra::gl::Buffer indices = penumbra::gl::Buffer::fromVector(c.indices);
@@ -91,7 +91,7 @@ Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpac
     const uint32_t poison = 0xDEADBEEFu;
     glClearNamedBufferData(builder.vertices().buffer, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
     glClearNamedBufferData(builder.offsets().buffer, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
-    builder.build(light, opacity, casters);
+    builder.build(light, opacity, casters, medium);
     glFinish();
     REQUIRE(glGetError() == GL_NO_ERROR);
     Run r;
@@ -101,10 +101,11 @@ Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpac
     return r;
 }
 
-void compareRun(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c) {
+void compareRun(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c,
+                const penumbra::DsmMedium& medium = {}) {
     const DsmFragmentsCpu cpu_fragments = penumbra::buildDsmFragmentsCpu(setup, light, c.positions, c.indices, opacity);
-    const DsmMapCpu cpu_map = penumbra::buildDsmMapCpu(setup, cpu_fragments, true);
-    const Run gpu = runGpu(setup, light, opacity, c);
+    const DsmMapCpu cpu_map = penumbra::buildDsmMapCpu(setup, cpu_fragments, true, light, medium);
+    const Run gpu = runGpu(setup, light, opacity, c, {}, medium);
     CHECK(gpu.status.fragment_overflow == 0);
     CHECK(gpu.status.vertex_overflow == 0);
     CHECK(gpu.status.fragments == cpu_fragments.fragments.size());
@@ -206,6 +207,26 @@ TEST_CASE("GPU deep shadow map == CPU twin: per-vertex opacity, S = 1, odd resol
         op.per_vertex.emplace_back(a, a, a);
     }
     compareRun(setup, lightFor(c), op, c);
+}
+
+TEST_CASE("GPU deep shadow map == CPU twin: hairball inside a participating medium (box over half of it), mips") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(1200, 6, false));
+    penumbra::scene::Bounds b;
+    for (const auto& p : c.positions) b.extend(p);
+    DsmOptions o;
+    o.resolution = 32;
+    o.samples = 4;
+    o.levels = 0;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    DsmOpacity op;
+    op.mesh = glm::vec3(0.3f);
+    penumbra::DsmMedium medium;
+    medium.lo = b.min - 0.1f * b.size();
+    medium.hi = b.center() + glm::vec3(0.0f, 0.2f, 0.0f) * b.size();
+    medium.sigma_t = 2.0f / glm::length(b.size());
+    medium.samples = 6;
+    compareRun(setup, lightFor(c), op, c, medium);
 }
 
 TEST_CASE("GPU deep shadow map lookups == dsmLookup (bilinear, trilinear, border)") {

@@ -1908,3 +1908,90 @@ TEST_CASE("deep shadow map: a Gaussian of radius 0.5 can leave a texel with no s
     CHECK(empty == expected_empty);
     WARN_MESSAGE(empty == 0, "texels whose filter holds no sub-sample are empty functions (V = 1 at every depth)");
 }
+
+// The participating medium (DsmMedium): a perspective light over a box of fog with one
+// semi-transparent quad inside it. Every texel's uncompressed function (box filter, own
+// sub-samples) at depths through the box equals the average over its sub-sample rays of the
+// oracle's exact transmittance (surfaces x exp(-sigma_t L), reference/transmittance.hpp) within the
+// error of interpolating exp linearly between the K + 1 medium samples (<= (sigma k span / K)^2 / 8)
+// plus float rounding; the compressed map adds at most eps; monotone everywhere; bad media throw.
+TEST_CASE("deep shadow map: participating medium against the oracle's exp(-sigma_t L)") {
+    const glm::vec3 eye(0.0f, 0.0f, 6.0f);
+    DsmLight light;
+    light.view = glm::lookAt(eye, glm::vec3(0.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+    light.projection = glm::perspective(0.5f, 1.0f, 1.0f, 12.0f);
+    // One quad at z = 0 (opacity 0.4) over half of the view; the fog box spans z in [-1, 1.5].
+    const std::vector<vec3> positions = {{-3, -3, 0}, {0, -3, 0}, {0, 3, 0}, {-3, 3, 0}};
+    const std::vector<uint32_t> indices = {0, 1, 2, 0, 2, 3};
+    DsmOpacity op;
+    op.mesh = vec3(0.4f);
+    penumbra::DsmMedium medium;
+    medium.lo = vec3(-0.8f, -2.0f, -1.0f);
+    medium.hi = vec3(2.0f, 0.9f, 1.5f);
+    medium.sigma_t = 0.8f;
+    medium.samples = 8;
+    DsmOptions o;
+    o.resolution = 16;
+    o.samples = 4;
+    const DsmSetup setup = penumbra::deepShadowMapSetup(o);
+    const DsmFragmentsCpu frags = penumbra::buildDsmFragmentsCpu(setup, light, positions, indices, op);
+    const DsmMapCpu exact = penumbra::buildDsmMapCpu(setup, frags, false, light, medium);
+    const DsmMapCpu packed = penumbra::buildDsmMapCpu(setup, frags, true, light, medium);
+    const DsmParams params = penumbra::deepShadowMapParams(setup, light, op, 0, medium);
+    penumbra::reference::HomogeneousMedium oracle_medium;
+    oracle_medium.lo = dvec3(medium.lo);
+    oracle_medium.hi = dvec3(medium.hi);
+    oracle_medium.sigma_t = medium.sigma_t;
+    const penumbra::reference::TransmittanceOracle oracle(positions, indices, 0.4, oracle_medium);
+    // Optical depth over a whole span is at most sigma_t * 2.5 * 1.04 (the box's z extent, rays
+    // within 15 degrees): the interpolation error per segment <= (2.6 sigma_t / K)^2 / 8.
+    const double interp = std::pow(2.6 * medium.sigma_t / medium.samples, 2.0) / 8.0 + 1e-5;
+    const glm::mat4 inv = params.inverse_view_projection;
+    double worst = 0.0, worst_packed = 0.0;
+    uint32_t checked = 0, kinked = 0;
+    for (uint32_t y = 0; y < o.resolution; ++y)
+        for (uint32_t x = 0; x < o.resolution; ++x) {
+            const uint32_t t = y * o.resolution + x;
+            const uint32_t n = exact.offsets[0][t + 1] - exact.offsets[0][t];
+            const float* ev = exact.vertices[0].data() + 2 * exact.offsets[0][t];
+            CHECK(penumbra::dsmMonotone(ev, n, 1));
+            const float* pv = packed.vertices[0].data() + 2 * packed.offsets[0][t];
+            CHECK(penumbra::dsmMonotone(pv, packed.offsets[0][t + 1] - packed.offsets[0][t], 1));
+            kinked += n > 2;
+            for (const float z : {4.2f, 5.0f, 5.8f, 6.01f, 6.5f, 7.2f, 8.0f}) {  // not at the quad's depth 6 (a tie)
+                double sum = 0.0;
+                for (uint32_t j = 0; j < o.samples; ++j) {
+                    const glm::vec2 s = penumbra::dsmSubSample(setup, x, y, j);
+                    const float px = s.x * params.numbers.x - 1.0f, py = s.y * params.numbers.x - 1.0f;
+                    const glm::dvec4 h0 = glm::dmat4(inv) * dvec4(px, py, -1.0, 1.0), h1 = glm::dmat4(inv) * dvec4(px, py, 1.0, 1.0);
+                    const dvec3 p0 = dvec3(h0) / h0.w, p1 = dvec3(h1) / h1.w;
+                    const double d0 = 6.0 - p0.z, d1 = 6.0 - p1.z;  // light depth: distance along -z from the eye
+                    const dvec3 point = p0 + (p1 - p0) * ((double(z) - d0) / (d1 - d0));
+                    sum += oracle.transmittance(point, dvec3(eye)).transmittance;
+                }
+                const double want = sum / o.samples;
+                const float got = penumbra::dsmVisibility(exact, 0, t, z);
+                const float got_packed = penumbra::dsmVisibility(packed, 0, t, z);
+                worst = std::max(worst, std::fabs(got - want));
+                worst_packed = std::max(worst_packed, std::fabs(got_packed - want));
+                ++checked;
+            }
+        }
+    MESSAGE("medium: ", checked, " (texel, depth) pairs, worst |V - oracle| ", worst, " (bound ", interp, "), compressed ",
+            worst_packed, " (bound ", interp + setup.tolerance, "); ", kinked, " texels with medium kinks");
+    CHECK(kinked > 0);
+    CHECK(worst <= interp);
+    CHECK(worst_packed <= interp + setup.tolerance);
+
+    penumbra::DsmMedium bad = medium;
+    bad.sigma_t = -1.0f;
+    CHECK_THROWS_WITH_AS(penumbra::checkDsmMedium(bad), doctest::Contains("sigma_t -1"), penumbra::Error);
+    bad.sigma_t = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(penumbra::checkDsmMedium(bad), doctest::Contains("sigma_t nan"), penumbra::Error);
+    bad = medium;
+    bad.lo.x = 5.0f;
+    CHECK_THROWS_WITH_AS(penumbra::checkDsmMedium(bad), doctest::Contains("[5, 2]"), penumbra::Error);
+    bad = medium;
+    bad.samples = 0;
+    CHECK_THROWS_WITH_AS(penumbra::checkDsmMedium(bad), doctest::Contains("samples 0"), penumbra::Error);
+}

@@ -86,7 +86,7 @@
 namespace penumbra {
 
 using DsmParams = shared::PenumbraDsmParams;
-static_assert(sizeof(DsmParams) == 176, "PenumbraDsmParams must be 176 bytes (std140 == std430)");
+static_assert(sizeof(DsmParams) == 272, "PenumbraDsmParams must be 272 bytes (std140 == std430)");
 
 inline constexpr uint32_t kDsmMaxResolution = PENUMBRA_DSM_MAX_RESOLUTION;
 inline constexpr uint32_t kDsmMaxSamples = PENUMBRA_DSM_MAX_SAMPLES;
@@ -247,11 +247,38 @@ struct DsmOpacity {
     std::vector<glm::vec3> per_vertex;
 };
 
+/// An optional homogeneous participating medium (lokovic2000 §3.2: smoke, fog): an axis-aligned
+/// box with extinction sigma_t; along each sub-sample's ray, from the light's eye plane on, the
+/// transmittance exp(-sigma_t L) of the path L inside the box, sampled at `samples` + 1 depths
+/// between entry and exit and linear in between (its error against the exponential is measured
+/// by the tests). Active when sigma_t > 0. Grey: it multiplies every channel alike.
+struct DsmMedium {
+    glm::vec3 lo{0.0f}, hi{0.0f};
+    float sigma_t = 0.0f;   ///< extinction per world unit; 0 = no medium
+    uint32_t samples = 8;   ///< segments per sub-sample ray; [1, 64]
+    bool active() const { return sigma_t > 0.0f; }
+};
+
+/// Throws penumbra::Error naming the bad value (non-finite or inverted box, sigma_t < 0 or NaN,
+/// samples outside [1, 64]).
+inline void checkDsmMedium(const DsmMedium& m) {
+    PENUMBRA_CHECK(std::isfinite(m.sigma_t) && m.sigma_t >= 0.0f, "deep shadow map: medium sigma_t ", m.sigma_t,
+                   " must be finite and >= 0");
+    if (!m.active()) return;
+    for (int a = 0; a < 3; ++a)
+        PENUMBRA_CHECK(std::isfinite(m.lo[a]) && std::isfinite(m.hi[a]) && m.lo[a] <= m.hi[a], "deep shadow map: medium box axis ",
+                       a, " [", m.lo[a], ", ", m.hi[a], "] must be finite with lo <= hi");
+    PENUMBRA_CHECK(m.samples >= 1 && m.samples <= 64, "deep shadow map: medium samples ", m.samples, " is outside [1, 64]");
+}
+
 /// The constants block of level `level` (the build's defaults for everything else).
 inline DsmParams deepShadowMapParams(const DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity,
-                                     uint32_t level = 0) {
+                                     uint32_t level = 0, const DsmMedium& medium = {}) {
     DsmParams p{};
     p.light_view_projection = light.projection * light.view;
+    p.inverse_view_projection = glm::inverse(p.light_view_projection);
+    p.medium_lo = glm::vec4(medium.lo, medium.active() ? medium.sigma_t : 0.0f);
+    p.medium_hi = glm::vec4(medium.hi, 0.0f);
     p.depth_row = -glm::vec4(light.view[0][2], light.view[1][2], light.view[2][2], light.view[3][2]);
     p.opacity = glm::vec4(opacity.mesh, 0.0f);
     p.size = glm::uvec4(setup.resolution, setup.samples, setup.channels, setup.levels);
@@ -263,7 +290,7 @@ inline DsmParams deepShadowMapParams(const DsmSetup& setup, const DsmLight& ligh
     p.flags = glm::uvec4(!opacity.per_vertex.empty()     ? PENUMBRA_DSM_OPACITY_VERTEX
                          : !opacity.per_triangle.empty() ? PENUMBRA_DSM_OPACITY_TRIANGLE
                                                          : PENUMBRA_DSM_OPACITY_MESH,
-                         0u, 0u, 0u);
+                         0u, medium.active() ? medium.samples : 0u, 0u);
     return p;
 }
 
@@ -577,20 +604,91 @@ struct DsmSink {
     }
 };
 
+/// exp(-x) for x >= 0 with + and * only (twin of penumbraDsmExpNeg): x = n ln2 + r, |r| <= ln2/2,
+/// a degree-7 Taylor polynomial of e^-r (relative error < 3e-7), scaled by 2^-n; 0 beyond x = 87.
+inline float dsmExpNeg(float x) {
+    if (!(x < 87.0f)) return 0.0f;
+    if (!(x > 0.0f)) return 1.0f;
+    const float n = std::floor(mulRounded(x, 1.44269504f) + 0.5f);
+    const float r = (x - mulRounded(n, 0.693145752f)) - mulRounded(n, 1.42860677e-06f);
+    float p = -1.98412698e-04f;  // -1/5040
+    p = mulRounded(p, r) + 1.38888889e-03f;
+    p = mulRounded(p, r) - 8.33333333e-03f;
+    p = mulRounded(p, r) + 4.16666667e-02f;
+    p = mulRounded(p, r) - 1.66666667e-01f;
+    p = mulRounded(p, r) + 0.5f;
+    p = mulRounded(p, r) - 1.0f;
+    p = mulRounded(p, r) + 1.0f;
+    return std::ldexp(p, -static_cast<int>(n));
+}
+
+/// The part of a sub-sample's ray inside the medium box (twin of penumbraDsmMediumSpan): the ray
+/// through NDC (px, py) from the light (two points from the inverse view-projection), clipped to the
+/// box (slabs) and to light depth >= 0; depths of entry and exit and sigma_t x path length per unit
+/// of light depth.
+struct DsmMediumSpan {
+    float z_in = 0, z_out = 0, sigma_k = 0;
+    bool valid = false;
+};
+
+inline glm::vec4 dsmTransform4(const glm::mat4& m, const glm::vec4& p) {
+    glm::vec4 c;
+    for (int r = 0; r < 4; ++r)
+        c[r] = ((mulRounded(m[0][r], p.x) + mulRounded(m[1][r], p.y)) + mulRounded(m[2][r], p.z)) + mulRounded(m[3][r], p.w);
+    return c;
+}
+
+inline DsmMediumSpan dsmMediumSpan(const DsmParams& params, float px, float py) {
+    DsmMediumSpan span;
+    const glm::vec4 h0 = dsmTransform4(params.inverse_view_projection, glm::vec4(px, py, -1.0f, 1.0f));
+    const glm::vec4 h1 = dsmTransform4(params.inverse_view_projection, glm::vec4(px, py, 1.0f, 1.0f));
+    const glm::vec3 p0(h0.x / h0.w, h0.y / h0.w, h0.z / h0.w), p1(h1.x / h1.w, h1.y / h1.w, h1.z / h1.w);
+    const float d0 = dsmDepth(params.depth_row, p0), d1 = dsmDepth(params.depth_row, p1);
+    const float dd = d1 - d0;
+    if (!(dd > 0.0f) || nonFinite(dd)) return span;
+    const glm::vec3 D = p1 - p0;
+    float tmin = -d0 / dd, tmax = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        const float lo = params.medium_lo[a], hi = params.medium_hi[a];
+        if (D[a] == 0.0f) {
+            if (p0[a] < lo || p0[a] > hi) return span;
+            continue;
+        }
+        const float t1 = (lo - p0[a]) / D[a], t2 = (hi - p0[a]) / D[a];
+        tmin = std::max(tmin, std::min(t1, t2));
+        tmax = std::min(tmax, std::max(t1, t2));
+    }
+    if (!(tmin < tmax)) return span;
+    span.z_in = d0 + mulRounded(tmin, dd);
+    span.z_out = d0 + mulRounded(tmax, dd);
+    const float len = std::sqrt((mulRounded(D.x, D.x) + mulRounded(D.y, D.y)) + mulRounded(D.z, D.z));
+    span.sigma_k = mulRounded(params.medium_lo.w, len / dd);
+    span.valid = span.z_in < span.z_out && !nonFinite(span.z_in) && !nonFinite(span.z_out) && !nonFinite(span.sigma_k);
+    return span;
+}
+
 /// The merge of one texel (§5.1; twin of merge.comp.glsl): a binary heap over the contributing
-/// sub-sample lists keyed by (z, list), each event V -= (w_j T_j) alpha, T_j *= (1 - alpha); one
-/// vertical step per distinct z.
+/// sub-sample lists keyed by (z of the list's next event, list); a surface event subtracts the
+/// sub-sample's old contribution, V -= (w_j T_j alpha) m_j(z), T_j *= (1 - alpha); with a medium
+/// (`medium` non-null, flags.z = K > 0) each list also has K + 1 medium vertices whose events
+/// change the slope S of V (V is linear between events: V(z) = V(z_prev) + S (z - z_prev), S
+/// clamped to <= 0). One vertical step per distinct z; a kink (slope change) gives one vertex.
 template <int C, typename Sink>
-void dsmMergeTexel(const DsmSetup& setup, const DsmFragmentsCpu& frags, uint32_t x, uint32_t y, Sink& sink) {
+void dsmMergeTexel(const DsmSetup& setup, const DsmFragmentsCpu& frags, uint32_t x, uint32_t y, Sink& sink,
+                   const DsmParams* medium = nullptr) {
     const int R = static_cast<int>(setup.resolution);
     const int reach = static_cast<int>(setup.reach);
     const uint32_t S = setup.samples;
     const float radius = setup.options.filter_radius;
     const float inv_r2 = 1.0f / (radius * radius);
+    const uint32_t K = medium ? medium->flags.z : 0u;
+    const float inf = std::numeric_limits<float>::infinity();
     struct List {
         uint32_t cur, end;
         float w;
         float t[C];
+        float zin, zspan, sk, seg_z0, seg_m0, seg_s, zm;
+        uint32_t mi;
     };
     std::vector<List> lists;
     lists.reserve(setup.merge_lists);
@@ -619,16 +717,37 @@ void dsmMergeTexel(const DsmSetup& setup, const DsmFragmentsCpu& frags, uint32_t
                 l.end = frags.offsets[k + 1];
                 l.w = w;
                 for (int c = 0; c < C; ++c) l.t[c] = 1.0f;
+                l.zin = l.zspan = l.sk = l.seg_z0 = l.seg_s = 0.0f;
+                l.seg_m0 = 1.0f;
+                l.zm = inf;
+                l.mi = K + 1;
+                if (K > 0) {
+                    const glm::vec2 sp = glm::vec2(static_cast<float>(nx) + o.x, static_cast<float>(ny) + o.y);
+                    const DsmMediumSpan span = dsmMediumSpan(*medium, dsmNdc(sp.x, medium->numbers.x), dsmNdc(sp.y, medium->numbers.x));
+                    if (span.valid) {
+                        l.zin = span.z_in;
+                        l.zspan = span.z_out - span.z_in;
+                        l.sk = span.sigma_k;
+                        l.mi = 0;
+                        l.zm = span.z_in;
+                    }
+                }
                 lists.push_back(l);
             }
         }
     if (lists.empty()) return;
     for (List& l : lists) l.w = l.w / total;
-    // Binary heap of list indices keyed by (z of the list's current fragment, index).
+    auto mediumZ = [&](const List& l, uint32_t i) {
+        return l.zin + mulRounded(l.zspan, static_cast<float>(i) / static_cast<float>(K));
+    };
+    auto nextZ = [&](const List& l) {
+        const float zf = l.cur < l.end ? frags.fragments[l.cur].z : inf;
+        return std::min(zf, l.zm);
+    };
     std::vector<uint32_t> heap;
     heap.reserve(lists.size());
     auto less = [&](uint32_t a, uint32_t b) {
-        const float za = frags.fragments[lists[a].cur].z, zb = frags.fragments[lists[b].cur].z;
+        const float za = nextZ(lists[a]), zb = nextZ(lists[b]);
         return za < zb || (za == zb && a < b);
     };
     auto siftDown = [&](size_t i) {
@@ -643,40 +762,83 @@ void dsmMergeTexel(const DsmSetup& setup, const DsmFragmentsCpu& frags, uint32_t
         }
     };
     for (uint32_t i = 0; i < lists.size(); ++i)
-        if (lists[i].cur < lists[i].end) heap.push_back(i);
+        if (lists[i].cur < lists[i].end || lists[i].zm < inf) heap.push_back(i);
     for (size_t i = heap.size() / 2; i-- > 0;) siftDown(i);
-    float v[C], before[C];
-    for (int c = 0; c < C; ++c) v[c] = 1.0f;
-    bool pending = false;
-    float z_group = 0.0f;
+    float v[C], before[C], slope[C];
+    for (int c = 0; c < C; ++c) v[c] = 1.0f, before[c] = 1.0f, slope[c] = 0.0f;
+    bool pending = false, kink = false, have_prev = false;
+    float z_group = 0.0f, z_prev = 0.0f;
+    auto flush = [&]() {
+        bool step = false;
+        for (int c = 0; c < C; ++c) step = step || v[c] != before[c];
+        if (step) {
+            sink.add(z_group, before);
+            sink.add(z_group, v);
+        } else if (kink) {
+            sink.add(z_group, v);
+        }
+    };
     while (!heap.empty()) {
         const uint32_t li = heap[0];
         List& l = lists[li];
-        const DsmFragment& f = frags.fragments[l.cur];
-        if (pending && f.z != z_group) {
-            bool step = false;
-            for (int c = 0; c < C; ++c) step = step || v[c] != before[c];
-            if (step) {
-                sink.add(z_group, before);
-                sink.add(z_group, v);
-            }
+        const float zf = l.cur < l.end ? frags.fragments[l.cur].z : inf;
+        const bool medium_event = l.zm <= zf;
+        const float z = medium_event ? l.zm : zf;
+        if (pending && z != z_group) {
+            flush();
             pending = false;
         }
         if (!pending) {
             pending = true;
-            z_group = f.z;
+            kink = false;
+            z_group = z;
+            if (K > 0 && have_prev) {  // V is linear between events
+                for (int c = 0; c < C; ++c) {
+                    const float e = v[c] + mulRounded(std::min(slope[c], 0.0f), z - z_prev);
+                    v[c] = std::max(0.0f, std::min(v[c], e));
+                }
+            }
+            z_prev = z;
+            have_prev = true;
             for (int c = 0; c < C; ++c) before[c] = v[c];
         }
         bool alive = false;
-        for (int c = 0; c < C; ++c) {
-            const float a = f.alpha[c];
-            v[c] = std::max(0.0f, v[c] - mulRounded(mulRounded(l.w, l.t[c]), a));
-            l.t[c] = mulRounded(l.t[c], 1.0f - a);
-            alive = alive || l.t[c] > 0.0f;
+        if (medium_event) {
+            const float m = dsmExpNeg(mulRounded(l.sk, l.zm - l.zin));
+            float s_new = 0.0f;
+            if (l.mi < K) {
+                const float z_next = mediumZ(l, l.mi + 1);
+                const float m_next = dsmExpNeg(mulRounded(l.sk, z_next - l.zin));
+                const float dz = z_next - l.zm;
+                s_new = dz > 0.0f ? (m_next - m) / dz : 0.0f;
+            }
+            for (int c = 0; c < C; ++c) {
+                slope[c] = slope[c] + mulRounded(mulRounded(l.w, l.t[c]), s_new - l.seg_s);
+                alive = alive || l.t[c] > 0.0f;
+            }
+            l.seg_z0 = l.zm;
+            l.seg_m0 = m;
+            l.seg_s = s_new;
+            ++l.mi;
+            l.zm = l.mi <= K ? mediumZ(l, l.mi) : inf;
+            kink = true;
+        } else {
+            const DsmFragment& f = frags.fragments[l.cur];
+            const float mz = l.mi == 0 ? 1.0f : l.seg_m0 + mulRounded(l.seg_s, z - l.seg_z0);
+            for (int c = 0; c < C; ++c) {
+                const float a = f.alpha[c];
+                const float wta = mulRounded(mulRounded(l.w, l.t[c]), a);
+                v[c] = std::max(0.0f, v[c] - mulRounded(wta, mz));
+                slope[c] = slope[c] - mulRounded(wta, l.seg_s);
+                l.t[c] = mulRounded(l.t[c], 1.0f - a);
+                alive = alive || l.t[c] > 0.0f;
+            }
+            if (l.seg_s != 0.0f) kink = true;
+            ++l.cur;
         }
-        ++l.cur;
-        // An opaque list adds nothing more (V - 0 == V): dropping it leaves every value unchanged.
-        if (l.cur < l.end && alive) {
+        // A list whose surfaces are opaque adds nothing more (V - 0 == V, S + 0 == S): dropping it
+        // leaves every value unchanged.
+        if ((l.cur < l.end || l.zm < inf) && alive) {
             siftDown(0);
         } else {
             heap[0] = heap.back();
@@ -684,14 +846,7 @@ void dsmMergeTexel(const DsmSetup& setup, const DsmFragmentsCpu& frags, uint32_t
             if (!heap.empty()) siftDown(0);
         }
     }
-    if (pending) {
-        bool step = false;
-        for (int c = 0; c < C; ++c) step = step || v[c] != before[c];
-        if (step) {
-            sink.add(z_group, before);
-            sink.add(z_group, v);
-        }
-    }
+    if (pending) flush();
 }
 
 /// Left (V(z-)) and right (V(z+)) limits of one texel's function at z; `i` is the caller's cursor
@@ -758,7 +913,8 @@ void dsmAverageTexel(const float* const verts[4], const uint32_t counts[4], Sink
 }
 
 template <int C>
-DsmMapCpu buildDsmMapCpuChannels(const DsmSetup& setup, const DsmFragmentsCpu& frags, bool compress) {
+DsmMapCpu buildDsmMapCpuChannels(const DsmSetup& setup, const DsmFragmentsCpu& frags, bool compress,
+                                 const DsmParams* medium) {
     constexpr int F = 1 + C;
     DsmMapCpu map;
     map.resolution = setup.resolution;
@@ -781,7 +937,7 @@ DsmMapCpu buildDsmMapCpuChannels(const DsmSetup& setup, const DsmFragmentsCpu& f
                 DsmSink<C> sink;
                 if (compress) sink.compressor = &compressor; else sink.raw = &out;
                 if (level == 0) {
-                    dsmMergeTexel<C>(setup, frags, x, y, sink);
+                    dsmMergeTexel<C>(setup, frags, x, y, sink, medium);
                 } else {
                     const uint32_t rc = setup.level_resolution[level - 1];
                     const std::vector<uint32_t>& co = map.offsets[level - 1];
@@ -809,8 +965,18 @@ DsmMapCpu buildDsmMapCpuChannels(const DsmSetup& setup, const DsmFragmentsCpu& f
 /// mip chain. compress = false keeps every merged vertex (the input the compression is checked
 /// against; levels > 0 then average uncompressed children: the exact averages).
 inline DsmMapCpu buildDsmMapCpu(const DsmSetup& setup, const DsmFragmentsCpu& frags, bool compress = true) {
-    return setup.channels == 3 ? detail::buildDsmMapCpuChannels<3>(setup, frags, compress)
-                               : detail::buildDsmMapCpuChannels<1>(setup, frags, compress);
+    return setup.channels == 3 ? detail::buildDsmMapCpuChannels<3>(setup, frags, compress, nullptr)
+                               : detail::buildDsmMapCpuChannels<1>(setup, frags, compress, nullptr);
+}
+
+/// The same with a participating medium along the light's rays (DsmMedium; inactive = the above).
+inline DsmMapCpu buildDsmMapCpu(const DsmSetup& setup, const DsmFragmentsCpu& frags, bool compress, const DsmLight& light,
+                                const DsmMedium& medium) {
+    checkDsmMedium(medium);
+    if (!medium.active()) return buildDsmMapCpu(setup, frags, compress);
+    const DsmParams params = deepShadowMapParams(setup, light, DsmOpacity{}, 0, medium);
+    return setup.channels == 3 ? detail::buildDsmMapCpuChannels<3>(setup, frags, compress, &params)
+                               : detail::buildDsmMapCpuChannels<1>(setup, frags, compress, &params);
 }
 
 /// V(z) of texel `texel` of `level`, channel c: left-continuous (a receiver exactly at a step's depth

@@ -95,7 +95,7 @@ public:
         offsets_ = Buffer(4 * offset_words_);
         vertices_ = Buffer(4ull * setup.vertexFloats() * capacity.vertices);
         dummy_ = Buffer(16);
-        ubo_stride_ = 256;
+        ubo_stride_ = static_cast<uint32_t>((sizeof(DsmParams) + 255) / 256 * 256);
         params_ = Buffer(ubo_stride_ * (setup.levels + 1), nullptr, GL_DYNAMIC_STORAGE_BIT);
         conservative_ubo_ = Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
         scanner_.reserve(std::max<uint64_t>(lists + 1, uint64_t(setup.resolution) * setup.resolution + 1));
@@ -151,13 +151,14 @@ public:
 
     /// Builds the map. Per-frame contract: no allocation, no query, no read-back, no throw; a caster
     /// range that is too small is the integrator's error (PENUMBRA_ASSERT).
-    void build(const DsmLight& light, const DsmOpacity& opacity, const DsmCasterBuffers& casters) {
+    /// `medium`: an optional participating medium (checkDsmMedium() it at load time).
+    void build(const DsmLight& light, const DsmOpacity& opacity, const DsmCasterBuffers& casters, const DsmMedium& medium = {}) {
         PENUMBRA_ASSERT(casters.index_count % 3 == 0 && casters.indices.holds(4ull * casters.index_count));
         const DsmSetup& s = setup_;
         DsmOpacity source;  // only the source kind and the mesh value matter here
         source.mesh = opacity.mesh;
         for (uint32_t level = 0; level < s.levels; ++level) {
-            DsmParams p = deepShadowMapParams(s, light, source, level);
+            DsmParams p = deepShadowMapParams(s, light, source, level, medium);
             p.flags.x = !casters.vertex_opacity.empty()     ? PENUMBRA_DSM_OPACITY_VERTEX
                         : !casters.triangle_opacity.empty() ? PENUMBRA_DSM_OPACITY_TRIANGLE
                                                             : PENUMBRA_DSM_OPACITY_MESH;

@@ -47,16 +47,19 @@ namespace penumbra::shared {
 #define PENUMBRA_DSM_STATUS_MERGE_OVERFLOW 4    // texels whose merge exceeded the per-invocation limits
 #define PENUMBRA_DSM_STATUS_WORDS 8
 
-/// The constants block of every deep-shadow-map kernel (std140 == std430, 176 bytes).
+/// The constants block of every deep-shadow-map kernel (std140 == std430, 272 bytes).
 struct PenumbraDsmParams {
     mat4 light_view_projection;  // clip = light_view_projection * (p, 1) (float, fixed order, no FMA)
+    mat4 inverse_view_projection;  // its inverse (host, float): the sub-sample rays of the medium
+    vec4 medium_lo;              // medium box min (xyz), w: sigma_t (0 = no medium)
+    vec4 medium_hi;              // medium box max (xyz), w: 0
     vec4 depth_row;              // light depth d = ((r.x x + r.y y) + r.z z) + r.w: distance along the light's axis
     vec4 opacity;                // per-mesh opacity (rgb; a = unused) when no per-triangle / per-vertex opacity
     uvec4 size;                  // x: resolution R, y: samples S, z: channels (1 or 3), w: level count
     uvec4 filtering;               // x: PENUMBRA_DSM_FILTER_*, y: reach (texels), z: merge lists (2 reach + 1)^2 S, w: level
     vec4 numbers;                // x: 2 / R (NDC per pixel), y: filter radius, z: 1 / radius^2, w: tolerance (inner) of this level
     uvec4 capacity;              // x: fragment capacity, y: vertex capacity, z: level texel offset, w: level resolution
-    uvec4 flags;                 // x: opacity source (PENUMBRA_DSM_OPACITY_*), y: pass (0 count, 1 write), z, w: 0
+    uvec4 flags;                 // x: opacity source (PENUMBRA_DSM_OPACITY_*), y: pass (0 count, 1 write), z: medium samples K (0 = none), w: 0
 };
 
 #ifdef __cplusplus

@@ -57,9 +57,30 @@ uint penumbraDsmEnd[PENUMBRA_DSM_MERGE_LISTS];
 float penumbraDsmW[PENUMBRA_DSM_MERGE_LISTS];
 float penumbraDsmT[PENUMBRA_DSM_MERGE_LISTS * PENUMBRA_DSM_CHANNELS];
 uint penumbraDsmHeap[PENUMBRA_DSM_MERGE_LISTS];
+// The medium, per list: entry depth, span, sigma_t k, current segment (start, value, slope), next
+// medium vertex depth (+inf: none) and index.
+float penumbraDsmZin[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmZspan[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmSk[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmSegZ[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmSegM[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmSegS[PENUMBRA_DSM_MERGE_LISTS];
+float penumbraDsmZm[PENUMBRA_DSM_MERGE_LISTS];
+uint penumbraDsmMi[PENUMBRA_DSM_MERGE_LISTS];
+uint penumbraDsmK = 0u;
 uint penumbraDsmHeapSize = 0u;
 
-float penumbraDsmZ(uint list) { return uintBitsToFloat(penumbraDsmRecords[penumbraDsmCur[list] * PENUMBRA_DSM_STRIDE].x); }
+float penumbraDsmFragmentZ(uint list) {
+    return penumbraDsmCur[list] < penumbraDsmEnd[list] ? uintBitsToFloat(penumbraDsmRecords[penumbraDsmCur[list] * PENUMBRA_DSM_STRIDE].x)
+                                                       : uintBitsToFloat(0x7F800000u);
+}
+float penumbraDsmZ(uint list) { return min(penumbraDsmFragmentZ(list), penumbraDsmZm[list]); }
+
+float penumbraDsmMediumZ(uint list, uint i) {
+    precise float f = float(i) / float(penumbraDsmK);
+    precise float z = penumbraDsmZin[list] + penumbraDsmZspan[list] * f;
+    return z;
+}
 
 bool penumbraDsmLess(uint a, uint b) {
     float za = penumbraDsmZ(a), zb = penumbraDsmZ(b);
@@ -79,11 +100,13 @@ void penumbraDsmSiftDown(uint i) {
     }
 }
 
-void penumbraDsmStep(float z, float before[PENUMBRA_DSM_CHANNELS], float v[PENUMBRA_DSM_CHANNELS]) {
+void penumbraDsmStep(float z, float before[PENUMBRA_DSM_CHANNELS], float v[PENUMBRA_DSM_CHANNELS], bool kink) {
     bool step = false;
     for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) step = step || v[c] != before[c];
     if (step) {
         penumbraDsmCompressAdd(z, before);
+        penumbraDsmCompressAdd(z, v);
+    } else if (kink) {
         penumbraDsmCompressAdd(z, v);
     }
 }
@@ -101,6 +124,7 @@ void main() {
     uint gauss = uint(PENUMBRA_DSM_PATTERNS) * S;  // the Gaussian table follows the patterns
     uint n = 0u;
     float total = 0.0;
+    penumbraDsmK = penumbraDsmParams.flags.z;
     for (int dy = -reach; dy <= reach; ++dy)
         for (int dx = -reach; dx <= reach; ++dx) {
             int nx = x + dx, ny = y + dy;
@@ -127,6 +151,30 @@ void main() {
                 penumbraDsmEnd[n] = min(penumbraDsmOffsets[k + 1u], cap);
                 penumbraDsmW[n] = w;
                 for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) penumbraDsmT[n * uint(PENUMBRA_DSM_CHANNELS) + uint(c)] = 1.0;
+                penumbraDsmZin[n] = 0.0;
+                penumbraDsmZspan[n] = 0.0;
+                penumbraDsmSk[n] = 0.0;
+                penumbraDsmSegZ[n] = 0.0;
+                penumbraDsmSegS[n] = 0.0;
+                penumbraDsmSegM[n] = 1.0;
+                penumbraDsmZm[n] = uintBitsToFloat(0x7F800000u);
+                penumbraDsmMi[n] = penumbraDsmK + 1u;
+                if (penumbraDsmK > 0u) {
+                    precise float sx = float(nx) + o.x;
+                    precise float sy = float(ny) + o.y;
+                    precise float px = sx * penumbraDsmParams.numbers.x - 1.0;
+                    precise float py = sy * penumbraDsmParams.numbers.x - 1.0;
+                    vec4 span = penumbraDsmMediumSpan(penumbraDsmParams.inverse_view_projection, penumbraDsmParams.depth_row,
+                                                      penumbraDsmParams.medium_lo, penumbraDsmParams.medium_hi, px, py);
+                    if (span.w != 0.0) {
+                        penumbraDsmZin[n] = span.x;
+                        precise float zspan = span.y - span.x;
+                        penumbraDsmZspan[n] = zspan;
+                        penumbraDsmSk[n] = span.z;
+                        penumbraDsmMi[n] = 0u;
+                        penumbraDsmZm[n] = span.x;
+                    }
+                }
                 ++n;
             }
         }
@@ -141,48 +189,93 @@ void main() {
         }
         penumbraDsmHeapSize = 0u;
         for (uint i = 0u; i < n; ++i)
-            if (penumbraDsmCur[i] < penumbraDsmEnd[i]) penumbraDsmHeap[penumbraDsmHeapSize++] = i;
+            if (penumbraDsmCur[i] < penumbraDsmEnd[i] || penumbraDsmZm[i] < uintBitsToFloat(0x7F800000u))
+                penumbraDsmHeap[penumbraDsmHeapSize++] = i;
         for (uint i = penumbraDsmHeapSize / 2u; i-- > 0u;) penumbraDsmSiftDown(i);
-        float v[PENUMBRA_DSM_CHANNELS], before[PENUMBRA_DSM_CHANNELS];
+        float v[PENUMBRA_DSM_CHANNELS], before[PENUMBRA_DSM_CHANNELS], slope[PENUMBRA_DSM_CHANNELS];
         for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
             v[c] = 1.0;
             before[c] = 1.0;
+            slope[c] = 0.0;
         }
-        bool pending = false;
-        float z_group = 0.0;
+        bool pending = false, kink = false, have_prev = false;
+        float z_group = 0.0, z_prev = 0.0;
         while (penumbraDsmHeapSize > 0u) {
             uint li = penumbraDsmHeap[0];
-            uint rec = penumbraDsmCur[li] * PENUMBRA_DSM_STRIDE;
-            uvec4 r0 = penumbraDsmRecords[rec];
-            float z = uintBitsToFloat(r0.x);
-            vec3 alpha;
-#if PENUMBRA_DSM_CHANNELS == 3
-            alpha = vec3(uintBitsToFloat(r0.z), uintBitsToFloat(r0.w), uintBitsToFloat(penumbraDsmRecords[rec + 1u].x));
-#else
-            alpha = vec3(uintBitsToFloat(r0.z), 0.0, 0.0);
-#endif
+            float zf = penumbraDsmFragmentZ(li);
+            bool medium_event = penumbraDsmZm[li] <= zf;
+            float z = medium_event ? penumbraDsmZm[li] : zf;
             if (pending && z != z_group) {
-                penumbraDsmStep(z_group, before, v);
+                penumbraDsmStep(z_group, before, v, kink);
                 pending = false;
             }
             if (!pending) {
                 pending = true;
+                kink = false;
                 z_group = z;
+                if (penumbraDsmK > 0u && have_prev) {
+                    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+                        precise float e = v[c] + min(slope[c], 0.0) * (z - z_prev);
+                        v[c] = max(0.0, min(v[c], e));
+                    }
+                }
+                z_prev = z;
+                have_prev = true;
                 for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) before[c] = v[c];
             }
             bool alive = false;
-            for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
-                uint ti = li * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
-                float a = alpha[c];
-                precise float wt = penumbraDsmW[li] * penumbraDsmT[ti];
-                precise float nv = v[c] - wt * a;
-                v[c] = max(0.0, nv);
-                precise float nt = penumbraDsmT[ti] * (1.0 - a);
-                penumbraDsmT[ti] = nt;
-                alive = alive || nt > 0.0;
+            if (medium_event) {
+                precise float xm = penumbraDsmSk[li] * (penumbraDsmZm[li] - penumbraDsmZin[li]);
+                float m = penumbraDsmExpNeg(xm);
+                float s_new = 0.0;
+                if (penumbraDsmMi[li] < penumbraDsmK) {
+                    float z_next = penumbraDsmMediumZ(li, penumbraDsmMi[li] + 1u);
+                    precise float xn = penumbraDsmSk[li] * (z_next - penumbraDsmZin[li]);
+                    float m_next = penumbraDsmExpNeg(xn);
+                    precise float dz = z_next - penumbraDsmZm[li];
+                    precise float sn = (m_next - m) / dz;
+                    s_new = dz > 0.0 ? sn : 0.0;
+                }
+                for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+                    uint ti = li * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+                    precise float wt = penumbraDsmW[li] * penumbraDsmT[ti];
+                    precise float ns = slope[c] + wt * (s_new - penumbraDsmSegS[li]);
+                    slope[c] = ns;
+                    alive = alive || penumbraDsmT[ti] > 0.0;
+                }
+                penumbraDsmSegZ[li] = penumbraDsmZm[li];
+                penumbraDsmSegM[li] = m;
+                penumbraDsmSegS[li] = s_new;
+                penumbraDsmMi[li]++;
+                penumbraDsmZm[li] = penumbraDsmMi[li] <= penumbraDsmK ? penumbraDsmMediumZ(li, penumbraDsmMi[li]) : uintBitsToFloat(0x7F800000u);
+                kink = true;
+            } else {
+                uint rec = penumbraDsmCur[li] * PENUMBRA_DSM_STRIDE;
+                uvec4 r0 = penumbraDsmRecords[rec];
+                vec3 alpha;
+#if PENUMBRA_DSM_CHANNELS == 3
+                alpha = vec3(uintBitsToFloat(r0.z), uintBitsToFloat(r0.w), uintBitsToFloat(penumbraDsmRecords[rec + 1u].x));
+#else
+                alpha = vec3(uintBitsToFloat(r0.z), 0.0, 0.0);
+#endif
+                precise float mzl = penumbraDsmSegM[li] + penumbraDsmSegS[li] * (z - penumbraDsmSegZ[li]);
+                float mz = penumbraDsmMi[li] == 0u ? 1.0 : mzl;
+                for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+                    uint ti = li * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+                    float a = alpha[c];
+                    precise float wta = (penumbraDsmW[li] * penumbraDsmT[ti]) * a;
+                    precise float nv = v[c] - wta * mz;
+                    v[c] = max(0.0, nv);
+                    precise float ns = slope[c] - wta * penumbraDsmSegS[li];
+                    slope[c] = ns;
+                    precise float nt = penumbraDsmT[ti] * (1.0 - a);
+                    penumbraDsmT[ti] = nt;
+                    alive = alive || nt > 0.0;
+                }
+                if (penumbraDsmSegS[li] != 0.0) kink = true;
+                penumbraDsmCur[li]++;
             }
-            penumbraDsmCur[li]++;
-            if (penumbraDsmCur[li] < penumbraDsmEnd[li] && alive) {
+            if ((penumbraDsmCur[li] < penumbraDsmEnd[li] || penumbraDsmZm[li] < uintBitsToFloat(0x7F800000u)) && alive) {
                 penumbraDsmSiftDown(0u);
             } else {
                 penumbraDsmHeap[0] = penumbraDsmHeap[penumbraDsmHeapSize - 1u];
@@ -190,7 +283,7 @@ void main() {
                 if (penumbraDsmHeapSize > 0u) penumbraDsmSiftDown(0u);
             }
         }
-        if (pending) penumbraDsmStep(z_group, before, v);
+        if (pending) penumbraDsmStep(z_group, before, v, kink);
     }
     penumbraDsmCompressFinish();
 #if PENUMBRA_DSM_PASS == 0
