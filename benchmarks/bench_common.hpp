@@ -86,6 +86,9 @@ double timeGpu(F&& f) {
 /// Counter value for "timer_gl_time_elapsed": 1 when timeGpu used the GL query, 0 for glFinish + wall clock.
 inline double timerCounter() { return detail::timeElapsedMeasures() ? 1.0 : 0.0; }
 
+/// Whether the last timeGpu call found GL_TIME_ELAPSED measuring durations.
+inline bool timeElapsedMeasuresNow() { return detail::timeElapsedMeasures(); }
+
 /// Sets the entry's "timer_gl_time_elapsed" counter to the share of its timeGpu calls (since the
 /// last report) that the GL_TIME_ELAPSED query timed: 1 every call, 0 none (glFinish + wall clock,
 /// e.g. llvmpipe), in between a mix that the entry's times should not be compared across.

@@ -67,6 +67,8 @@
 #include "bench_common.hpp"
 
 #include <penumbra/deep_shadow_map.hpp>
+#include <penumbra/gl/deep_shadow_map.hpp>
+#include <penumbra/gl/objects.hpp>
 #include <penumbra/reference/transmittance.hpp>
 #include <penumbra/scene/scene.hpp>
 
@@ -306,7 +308,7 @@ const LookupReference& dsmBenchLookupReference(const std::string& scene, uint32_
 
 /// Milliseconds. No MinTime / UseRealTime (they would append "/min_time:...", "/real_time" to the
 /// names): every entry is single-threaded, so CPU time is its wall time; --benchmark_min_time applies.
-void configure(benchmark::internal::Benchmark* b) { b->Unit(benchmark::kMillisecond); }
+benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) { return b->Unit(benchmark::kMillisecond); }
 
 // ---- 1. compression table ----
 
@@ -640,6 +642,103 @@ void pcfBaselineEntry(benchmark::State& state, uint32_t R, uint32_t S) {
     state.counters["build_ms"] = build_ms;
 }
 
+// ---- 6. the GPU build and GPU lookups (penumbra/gl/deep_shadow_map.hpp) ----
+// The whole build timed with penumbra::bench::timeGpu (GL_TIME_ELAPSED where the driver's answers
+// are durations, glFinish + the wall clock elsewhere: timer_gl_time_elapsed says which), the four
+// stages with the builder's own queries (medians); identical_to_twin compares every level-0 offset
+// and vertex with the CPU twin's map (1 = bit for bit; llvmpipe rounds like the twin).
+
+struct GpuCasters {
+    penumbra::gl::Buffer positions, indices;
+    penumbra::gl::DsmCasterBuffers ranges;
+};
+
+GpuCasters gpuCasters(const DsmBenchScene& s) {
+    GpuCasters g;
+    g.positions = penumbra::gl::Buffer::fromVector(s.casters.positions);
+    g.indices = penumbra::gl::Buffer::fromVector(s.casters.indices);
+    g.ranges.positions = {g.positions.id(), 0, g.positions.size()};
+    g.ranges.indices = {g.indices.id(), 0, g.indices.size()};
+    g.ranges.index_count = static_cast<uint32_t>(s.casters.indices.size());
+    return g;
+}
+
+void gpuBuildEntry(benchmark::State& state, uint32_t R, uint32_t S) {
+    penumbra::bench::glContext();
+    const DsmBenchScene& s = dsmBenchScene("hairball");
+    const penumbra::DsmSetup setup = dsmBenchSetup(R, S);
+    const penumbra::DsmFragmentsCpu& frags = dsmBenchFragments("hairball", R, S);
+    const penumbra::DsmMapCpu& cpu = dsmBenchMap("hairball", R, S);
+    penumbra::gl::DsmCapacity capacity;
+    capacity.fragments = frags.fragments.size() + 16;
+    capacity.vertices = cpu.vertexCount(0) + 16;
+    penumbra::gl::DeepShadowMapBuilder builder(setup, capacity);
+    const GpuCasters casters = gpuCasters(s);
+    auto run = [&] { builder.build(s.light.light, s.opacity, casters.ranges); };
+    penumbra::bench::timeGpu(run);  // warm-up (llvmpipe compiles at the first draw)
+    for (auto _ : state) state.SetIterationTime(penumbra::bench::timeGpu(run));
+    // Stage split: one more build per iteration count with the stages bracketed (queries where
+    // they measure durations, else glFinish + wall clock); not part of the timed builds above.
+    builder.enableStageTimers(!penumbra::bench::timeElapsedMeasuresNow());
+    std::vector<double> raster, sort, merge;
+    for (int i = 0; i < 3; ++i) {
+        run();
+        const penumbra::gl::DsmStageTimes t = builder.stageTimes();
+        raster.push_back(t.rasterize);
+        sort.push_back(t.sort);
+        merge.push_back(t.merge_compress);
+    }
+    const penumbra::DsmMapCpu gpu = builder.readMap();
+    const penumbra::gl::DsmStatus status = builder.readStatus();
+    const bool identical = gpu.offsets[0] == cpu.offsets[0] && gpu.vertices[0].size() == cpu.vertices[0].size() &&
+                           std::equal(gpu.vertices[0].begin(), gpu.vertices[0].end(), cpu.vertices[0].begin(),
+                                      [](float a, float b) { return penumbra::detail::floatBits(a) == penumbra::detail::floatBits(b); });
+    state.counters["identical_to_twin"] = identical ? 1.0 : 0.0;
+    state.counters["overflow"] = double(status.fragment_overflow + status.vertex_overflow);
+    state.counters["fragments"] = double(status.fragments);
+    state.counters["vertices"] = double(gpu.vertexCount(0));
+    state.counters["bytes_level0"] = double(levelBytes(gpu, 0));
+    state.counters["rasterize_ms"] = penumbra::bench::median(raster);
+    state.counters["sort_ms"] = penumbra::bench::median(sort);
+    state.counters["merge_compress_ms"] = penumbra::bench::median(merge);
+    penumbra::bench::reportTimer(state);
+}
+
+void gpuLookupEntry(benchmark::State& state, uint32_t R, uint32_t S) {
+    penumbra::bench::glContext();
+    const DsmBenchScene& s = dsmBenchScene("hairball");
+    const penumbra::DsmSetup setup = dsmBenchSetup(R, S);
+    const penumbra::DsmFragmentsCpu& frags = dsmBenchFragments("hairball", R, S);
+    const penumbra::DsmMapCpu& cpu = dsmBenchMap("hairball", R, S);
+    penumbra::gl::DsmCapacity capacity;
+    capacity.fragments = frags.fragments.size() + 16;
+    capacity.vertices = cpu.vertexCount(0) + 16;
+    penumbra::gl::DeepShadowMapBuilder builder(setup, capacity);
+    const GpuCasters casters = gpuCasters(s);
+    builder.build(s.light.light, s.opacity, casters.ranges);
+    const Receivers& receivers = dsmBenchReceivers("hairball");
+    std::vector<glm::vec4> queries;
+    for (const glm::vec3& p : receivers.points) {
+        const penumbra::DsmCoord c = penumbra::dsmCoord(builder.params(), p);
+        queries.emplace_back(c.u, c.v, c.depth, 0.0f);
+    }
+    penumbra::gl::Buffer q = penumbra::gl::Buffer::fromVector(queries), r(queries.size() * 16);
+    const uint32_t n = static_cast<uint32_t>(queries.size());
+    auto run = [&] { builder.lookup({q.id(), 0, q.size()}, {r.id(), 0, r.size()}, n); };
+    penumbra::bench::timeGpu(run);
+    for (auto _ : state) state.SetIterationTime(penumbra::bench::timeGpu(run));
+    state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * n);
+    std::vector<glm::vec4> got(queries.size());
+    glGetNamedBufferSubData(r.id(), 0, static_cast<GLsizeiptr>(r.size()), got.data());
+    double differ = 0.0;
+    for (size_t i = 0; i < queries.size(); ++i)
+        differ += penumbra::detail::floatBits(got[i].x) !=
+                  penumbra::detail::floatBits(penumbra::dsmLookup(cpu, queries[i].x, queries[i].y, queries[i].z, 0.0f));
+    state.counters["err_bits_vs_twin"] = differ;
+    state.counters["lookups"] = double(n);
+    penumbra::bench::reportTimer(state);
+}
+
 // ---- registration (in this order: the table's and the stage entries' caches feed the later ones) ----
 
 const bool kDsmRegistered = [] {
@@ -672,6 +771,19 @@ const bool kDsmRegistered = [] {
     const Args lookup_resolutions = smoke() ? Args{32} : Args{128, 256};
     each("BM_DsmLookup", lookupEntry, lookup_resolutions);
     each("BM_DsmPcfBaseline", pcfBaselineEntry, lookup_resolutions);
+    const Args gpu_resolutions = smoke() ? Args{32} : Args{64, 128, 256};
+    for (uint32_t R : gpu_resolutions)
+        for (uint32_t S : samples) {
+            const std::string b = "BM_DsmGpuBuild/" + std::to_string(R) + "/" + std::to_string(S);
+            configure(benchmark::RegisterBenchmark(b.c_str(), [R, S](benchmark::State& st) { gpuBuildEntry(st, R, S); }))
+                ->UseManualTime();
+        }
+    for (uint32_t R : lookup_resolutions)
+        for (uint32_t S : samples) {
+            const std::string b = "BM_DsmGpuLookup/" + std::to_string(R) + "/" + std::to_string(S);
+            configure(benchmark::RegisterBenchmark(b.c_str(), [R, S](benchmark::State& st) { gpuLookupEntry(st, R, S); }))
+                ->UseManualTime();
+        }
     return true;
 }();
 
