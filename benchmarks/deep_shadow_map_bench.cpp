@@ -493,8 +493,7 @@ ErrorStats errorsAgainst(const LookupReference& ref, const std::vector<float>& g
     return e;
 }
 
-void lookupEntry(benchmark::State& state, uint32_t R, uint32_t S) {
-    const std::string scene = "hairball";
+void lookupEntry(benchmark::State& state, const std::string& scene, uint32_t R, uint32_t S) {
     const DsmBenchScene& s = dsmBenchScene(scene);
     const penumbra::DsmSetup setup = dsmBenchSetup(R, S);
     const penumbra::DsmParams params = penumbra::deepShadowMapParams(setup, s.light.light, s.opacity);
@@ -613,8 +612,7 @@ float pcfLookup(const DepthMap& m, const glm::vec3& p) {
     return static_cast<float>(lit) * (1.0f / 9.0f);
 }
 
-void pcfBaselineEntry(benchmark::State& state, uint32_t R, uint32_t S) {
-    const std::string scene = "hairball";
+void pcfBaselineEntry(benchmark::State& state, const std::string& scene, uint32_t R, uint32_t S) {
     const DsmBenchScene& s = dsmBenchScene(scene);
     const uint64_t dsm_bytes = levelBytes(dsmBenchMap(scene, R, S), 0);
     const uint32_t Rb = std::min(penumbra::kDsmMaxResolution,
@@ -769,8 +767,16 @@ const bool kDsmRegistered = [] {
     each("BM_DsmMergeCompress", mergeCompressEntry, resolutions);
     each("BM_DsmMips", mipsEntry, resolutions);
     const Args lookup_resolutions = smoke() ? Args{32} : Args{128, 256};
-    each("BM_DsmLookup", lookupEntry, lookup_resolutions);
-    each("BM_DsmPcfBaseline", pcfBaselineEntry, lookup_resolutions);
+    // Lookup error on both scenes: the deep shadow map and, at equal memory, a PCF shadow map.
+    for (const std::string& scene : scenes)
+        for (uint32_t R : lookup_resolutions)
+            for (uint32_t S : samples) {
+                const std::string tail = "/" + scene + "/" + std::to_string(R) + "/" + std::to_string(S);
+                configure(benchmark::RegisterBenchmark(("BM_DsmLookup" + tail).c_str(),
+                                                       [scene, R, S](benchmark::State& st) { lookupEntry(st, scene, R, S); }));
+                configure(benchmark::RegisterBenchmark(("BM_DsmPcfBaseline" + tail).c_str(),
+                                                       [scene, R, S](benchmark::State& st) { pcfBaselineEntry(st, scene, R, S); }));
+            }
     const Args gpu_resolutions = smoke() ? Args{32} : Args{64, 128, 256};
     for (uint32_t R : gpu_resolutions)
         for (uint32_t S : samples) {
