@@ -220,9 +220,7 @@ const penumbra::DsmMapCpu& dsmBenchMap(const std::string& scene, uint32_t R, uin
     return *m;
 }
 
-uint64_t levelBytes(const penumbra::DsmMapCpu& map, uint32_t level) {
-    return 4ull * map.offsets[level].size() + 4ull * map.vertices[level].size();
-}
+uint64_t levelBytes(const penumbra::DsmMapCpu& map, uint32_t level) { return map.levelBytes(level); }
 
 struct Receivers {
     std::vector<glm::vec3> points;  ///< uniform in the casters' bounds, projecting into the map

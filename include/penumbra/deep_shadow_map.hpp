@@ -10,8 +10,9 @@
 //             as a view-projection (clip space) plus its depth row (light depth = distance along the
 //             light's axis: -z of the light's view space, for perspective and orthographic lights).
 //   produces: per level (0 = R x R, then halving) a texel offset table (exclusive scan of the vertex
-//             counts, R*R + 1 entries) and the vertices, (z, V) for one channel (8 bytes) or
-//             (z, r, g, b) for three (16 bytes). V is non-increasing in z.
+//             counts, R*R + 1 entries) and the vertices: float z and V per channel in 16 bits
+//             (6 bytes per grey vertex, 10 per RGB one on the GPU; DsmMapCpu holds them decoded,
+//             (1 + channels) floats). V is non-increasing in z.
 //   lookup:   dsmVisibility (one texel, left-continuous: a receiver exactly at a surface's depth is
 //             not shadowed by it), dsmLookup (bilinear over texels, trilinear over levels) — the CPU
 //             twins of shaders/penumbra/deep_shadow_map/lookup.glsl.
@@ -44,6 +45,10 @@
 // product is rounded on its own (no FMA; GLSL `precise`), so on drivers with correctly rounded
 // float32 arithmetic (llvmpipe) the GPU's fragments, depths, vertices and lookups equal this twin's
 // bit for bit; elsewhere they differ by rounding (the tests' portable tier bounds it).
+//
+// Storage: per vertex float z and, per channel, V in 16 bits (q / 32768, exact for dyadic values;
+// 6 bytes per grey vertex), each texel's count padded to even (a copy of its last vertex). The
+// rounding (<= 2^-16) comes out of the tolerance first, so stored values keep the bound below.
 //
 // Compression (§3.3, the greedy L-infinity algorithm): keep the slope window [lo, hi] of the
 // current segment open as long as every input vertex since its origin lies within the tolerance of
@@ -96,6 +101,19 @@ inline constexpr uint32_t kDsmGaussTable = PENUMBRA_DSM_GAUSS_TABLE;
 /// The smallest tolerance: below it float rounding of V (~1e-7) is no longer small against the
 /// 1/64 of the tolerance the compressor keeps in reserve.
 inline constexpr float kDsmMinTolerance = 1.0f / 4096.0f;
+/// Stored V: 16 bits, V = q / 32768 (q in [0, 32768]): dyadic values (1, 1/2, 3/4 ...) stay exact and
+/// decoding is one exact multiplication on every platform; the rounding (<= 2^-16) is taken out of
+/// the tolerance before compressing (dsmInnerTolerance).
+inline constexpr float kDsmVScale = 32768.0f;
+inline constexpr float kDsmQuantization = 1.0f / 65536.0f;
+
+/// The tolerance the compressor's windows use for a level of tolerance `tol`: minus 1/64 of it
+/// (float rounding) and minus the 16-bit rounding of the stored values (DsmParams::numbers.w).
+inline float dsmInnerTolerance(float tol) { return (tol - tol * (1.0f / 64.0f)) - kDsmQuantization; }
+
+/// The stored value of V (twin of penumbraDsmQuantize / penumbraDsmDecode).
+inline uint32_t dsmQuantize(float v) { return static_cast<uint32_t>(v * kDsmVScale + 0.5f); }
+inline float dsmDecode(uint32_t q) { return static_cast<float>(q) * (1.0f / kDsmVScale); }
 
 enum class DsmFilter : uint32_t { Box = PENUMBRA_DSM_FILTER_BOX, Gaussian = PENUMBRA_DSM_FILTER_GAUSSIAN };
 
@@ -285,7 +303,7 @@ inline DsmParams deepShadowMapParams(const DsmSetup& setup, const DsmLight& ligh
     p.filtering = glm::uvec4(static_cast<uint32_t>(setup.options.filter), setup.reach, setup.merge_lists, level);
     const float r = setup.options.filter_radius;
     const float tol = setup.levelTolerance(level);
-    p.numbers = glm::vec4(2.0f / static_cast<float>(setup.resolution), r, 1.0f / (r * r), tol - tol * (1.0f / 64.0f));
+    p.numbers = glm::vec4(2.0f / static_cast<float>(setup.resolution), r, 1.0f / (r * r), dsmInnerTolerance(tol));
     p.capacity = glm::uvec4(0u, 0u, static_cast<uint32_t>(setup.level_texel_offset[level]), setup.level_resolution[level]);
     p.flags = glm::uvec4(!opacity.per_vertex.empty()     ? PENUMBRA_DSM_OPACITY_VERTEX
                          : !opacity.per_triangle.empty() ? PENUMBRA_DSM_OPACITY_TRIANGLE
@@ -314,9 +332,16 @@ struct DsmMapCpu {
     std::vector<std::vector<uint32_t>> offsets;    ///< per level: texels + 1 entries (vertex indices)
     std::vector<std::vector<float>> vertices;      ///< per level: (1 + channels) floats per vertex
     uint64_t vertexCount(uint32_t level) const { return offsets[level].back(); }
+    bool packed = false;  ///< compressed: stored as float z + 16-bit V per channel (else float everywhere)
+    /// Bytes of level `level` as stored: 4 per offset entry + per vertex 4 (z) + 2 per channel
+    /// (packed) or 4 per channel.
+    uint64_t levelBytes(uint32_t level) const {
+        const uint64_t n = offsets[level].back();
+        return 4ull * offsets[level].size() + n * (4ull + (packed ? 2ull : 4ull) * channels);
+    }
     uint64_t bytes() const {
         uint64_t b = 0;
-        for (uint32_t l = 0; l < levels; ++l) b += 4ull * offsets[l].size() + 4ull * vertices[l].size();
+        for (uint32_t l = 0; l < levels; ++l) b += levelBytes(l);
         return b;
     }
 };
@@ -500,7 +525,9 @@ namespace detail {
 template <int C>
 class DsmCompressor {
 public:
-    /// eps_inner: the tolerance minus its 1/64 (DsmParams::numbers.w).
+    /// eps_inner: dsmInnerTolerance of the tolerance (DsmParams::numbers.w). Output values are the
+    /// stored ones (16-bit, decoded); a texel's vertex count is padded to even with a copy of its
+    /// last vertex (so that its 16-bit values fill whole 32-bit words on the GPU).
     explicit DsmCompressor(float eps_inner, std::vector<float>* out) : eps_(eps_inner), out_(out) {}
 
     void add(float z, const float* v) {
@@ -543,9 +570,10 @@ public:
         }
     }
 
-    /// Ends the last segment.
+    /// Ends the last segment and pads to an even vertex count.
     void finish() {
         if (open_ && z_last_ != zo_) close();
+        if (count_ & 1u) emit();
         open_ = false;
     }
 
@@ -578,7 +606,7 @@ private:
         ++count_;
         if (!out_) return;
         out_->push_back(zo_);
-        for (int c = 0; c < C; ++c) out_->push_back(vo_[c]);
+        for (int c = 0; c < C; ++c) out_->push_back(dsmDecode(dsmQuantize(vo_[c])));
     }
 
     float eps_;
@@ -920,13 +948,14 @@ DsmMapCpu buildDsmMapCpuChannels(const DsmSetup& setup, const DsmFragmentsCpu& f
     map.resolution = setup.resolution;
     map.channels = C;
     map.levels = setup.levels;
+    map.packed = compress;
     map.resolution_of = setup.level_resolution;
     map.offsets.resize(setup.levels);
     map.vertices.resize(setup.levels);
     for (uint32_t level = 0; level < setup.levels; ++level) {
         const uint32_t r = setup.level_resolution[level];
         const float tol = setup.levelTolerance(level);
-        const float eps_inner = tol - tol * (1.0f / 64.0f);
+        const float eps_inner = dsmInnerTolerance(tol);
         std::vector<uint32_t>& offsets = map.offsets[level];
         std::vector<float>& out = map.vertices[level];
         offsets.assign(static_cast<size_t>(r) * r + 1, 0);

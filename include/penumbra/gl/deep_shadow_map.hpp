@@ -6,7 +6,8 @@
 //             block (the builder owns one Scanner); casters as a vec3 float vertex buffer range +
 //             uint32 index range (GL_TRIANGLES); optional per-vertex opacity (vec3 float range) or
 //             per-triangle opacity (vec4 float range).
-//   produces: the map in the builder's buffers (offsets(), vertices(): the layout of lookup.glsl),
+//   produces: the map in the builder's buffers (offsets(), vertices(): the layout of lookup.glsl —
+//             float z per vertex, then from word `capacity.vertices` on the 16-bit V values),
 //             plus a status block (PENUMBRA_DSM_STATUS_*: fragments dropped over the capacity,
 //             vertices dropped, ...) the integrator may read after the frame (readStatus()).
 //   passes:   1 raster count (conservative hull per triangle, each fragment tests its texel's S
@@ -101,7 +102,7 @@ public:
         records_ = Buffer(stride * capacity.fragments);
         status_ = Buffer(4 * PENUMBRA_DSM_STATUS_WORDS);
         offsets_ = Buffer(4 * offset_words_);
-        vertices_ = Buffer(4ull * setup.vertexFloats() * capacity.vertices);
+        vertices_ = Buffer(4ull * (capacity.vertices + (capacity.vertices * setup.channels + 1) / 2));
         dummy_ = Buffer(16);
         ubo_stride_ = static_cast<uint32_t>((sizeof(DsmParams) + 255) / 256 * 256);
         params_ = Buffer(ubo_stride_ * (setup.levels + 1), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -306,6 +307,10 @@ public:
         map.resolution_of = s.level_resolution;
         std::vector<uint32_t> words(offset_words_);
         glGetNamedBufferSubData(offsets_.id(), 0, static_cast<GLsizeiptr>(4 * offset_words_), words.data());
+        const uint64_t cap = capacity_.vertices, C = s.channels;
+        std::vector<uint32_t> vw(static_cast<size_t>(cap + (cap * C + 1) / 2));
+        glGetNamedBufferSubData(vertices_.id(), 0, static_cast<GLsizeiptr>(4 * vw.size()), vw.data());
+        map.packed = true;
         uint64_t base = 0, word = 0;
         const uint32_t F = s.vertexFloats();
         for (uint32_t l = 0; l < s.levels; ++l) {
@@ -313,11 +318,17 @@ public:
             map.offsets.emplace_back(words.begin() + static_cast<ptrdiff_t>(word),
                                      words.begin() + static_cast<ptrdiff_t>(word + uint64_t(r) * r + 1));
             const uint64_t n = map.offsets.back().back();
-            const uint64_t avail = capacity_.vertices > base ? std::min<uint64_t>(n, capacity_.vertices - base) : 0;
             map.vertices.emplace_back(static_cast<size_t>(n * F), 0.0f);
-            if (avail)
-                glGetNamedBufferSubData(vertices_.id(), static_cast<GLintptr>(4 * base * F), static_cast<GLsizeiptr>(4 * avail * F),
-                                        map.vertices.back().data());
+            std::vector<float>& out = map.vertices.back();
+            for (uint64_t i = 0; i < n && base + i < cap; ++i) {
+                const uint64_t vertex = base + i;
+                out[F * i] = ::penumbra::detail::floatFromBits(vw[vertex]);
+                for (uint64_t c = 0; c < C; ++c) {
+                    const uint64_t h = vertex * C + c;
+                    const uint32_t w = vw[cap + h / 2];
+                    out[F * i + 1 + c] = dsmDecode((h & 1) ? (w >> 16) : (w & 0xFFFFu));
+                }
+            }
             base += n;
             word += uint64_t(r) * r + 1;
         }

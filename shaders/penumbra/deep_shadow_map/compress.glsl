@@ -105,6 +105,7 @@ void penumbraDsmCompressAdd(float z, float v[PENUMBRA_DSM_C]) {
 
 void penumbraDsmCompressFinish() {
     if (penumbraDsmCOpen && penumbraDsmCZLast != penumbraDsmCZo) penumbraDsmCClose();
+    if ((penumbraDsmCCount & 1u) != 0u) penumbraDsmCEmit();  // even counts: whole 32-bit words of 16-bit V
     penumbraDsmCOpen = false;
 }
 

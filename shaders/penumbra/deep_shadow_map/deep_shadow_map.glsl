@@ -50,6 +50,13 @@ float penumbraDsmDepth(vec4 row, vec3 p) {
     return d;
 }
 
+// Stored V: 16 bits, q / 32768 (twins of dsmQuantize / dsmDecode).
+uint penumbraDsmQuantize(float v) {
+    precise float q = v * 32768.0 + 0.5;
+    return uint(q);
+}
+float penumbraDsmDecode(uint q) { return float(q) * (1.0 / 32768.0); }
+
 bool penumbraDsmNonFinite(float f) { return (floatBitsToUint(f) & 0x7F800000u) == 0x7F800000u; }
 
 // exp(-x), x >= 0, with + and * only (twin of detail::dsmExpNeg).

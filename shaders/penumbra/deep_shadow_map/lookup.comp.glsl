@@ -15,10 +15,11 @@ layout(std140, binding = PENUMBRA_DSM_BINDING_PARAMS) uniform PenumbraDsmParamsB
 layout(std430, binding = PENUMBRA_DSM_BINDING_QUERIES) readonly buffer PenumbraDsmQueries { vec4 penumbraDsmQueries[]; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_RESULTS) writeonly buffer PenumbraDsmResults { vec4 penumbraDsmResults[]; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_OFFSETS) readonly buffer PenumbraDsmMapOffsets { uint penumbraDsmMapOffsets[]; };
-layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) readonly buffer PenumbraDsmMapVertices { float penumbraDsmMapVertices[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) readonly buffer PenumbraDsmMapVertices { uint penumbraDsmMapWords[]; };
 
 #define PENUMBRA_DSM_LOAD_OFFSET(word) penumbraDsmMapOffsets[word]
-#define PENUMBRA_DSM_LOAD_FLOAT(index) penumbraDsmMapVertices[index]
+#define PENUMBRA_DSM_LOAD_WORD(index) penumbraDsmMapWords[index]
+#define PENUMBRA_DSM_VERTEX_CAPACITY penumbraDsmParams.capacity.y
 #define PENUMBRA_DSM_RESOLUTION penumbraDsmParams.size.x
 #define PENUMBRA_DSM_LEVELS penumbraDsmParams.size.w
 #include "penumbra/deep_shadow_map/lookup.glsl"

@@ -4,20 +4,26 @@
 // (include/penumbra/deep_shadow_map.hpp).
 //   hooks (define before including):
 //     PENUMBRA_DSM_LOAD_OFFSET(word)   uint: word `word` of the map's offset buffer
-//     PENUMBRA_DSM_LOAD_FLOAT(index)   float: float `index` of the map's vertex buffer
+//     PENUMBRA_DSM_LOAD_WORD(index)    uint: word `index` of the map's vertex buffer
+//     PENUMBRA_DSM_VERTEX_CAPACITY     uint: the vertex capacity (where the 16-bit values start)
 //     PENUMBRA_DSM_RESOLUTION          uint: R of level 0
 //     PENUMBRA_DSM_LEVELS              uint: levels in the map
 //   PENUMBRA_DSM_CHANNELS: 1 (default) or 3; `c` selects the channel.
 // Layout: level l's offsets are R_l^2 + 1 words at word sum_{k<l} R_k^2 + l (local vertex indices);
-// its vertices follow the vertices of levels 0 .. l-1 ((1 + channels) floats each).
+// its vertices follow the vertices of levels 0 .. l-1. Vertex i: z = float bits of word i; V of
+// channel c = 16-bit halfword h = i * channels + c at word capacity + h / 2 (low half first), V =
+// q / 32768.
 #ifndef PENUMBRA_DSM_LOOKUP_GLSL
 #define PENUMBRA_DSM_LOOKUP_GLSL
 
 #ifndef PENUMBRA_DSM_LOAD_OFFSET
 #error penumbra/deep_shadow_map/lookup.glsl needs the hook PENUMBRA_DSM_LOAD_OFFSET(word)
 #endif
-#ifndef PENUMBRA_DSM_LOAD_FLOAT
-#error penumbra/deep_shadow_map/lookup.glsl needs the hook PENUMBRA_DSM_LOAD_FLOAT(index)
+#ifndef PENUMBRA_DSM_LOAD_WORD
+#error penumbra/deep_shadow_map/lookup.glsl needs the hook PENUMBRA_DSM_LOAD_WORD(index)
+#endif
+#ifndef PENUMBRA_DSM_VERTEX_CAPACITY
+#error penumbra/deep_shadow_map/lookup.glsl needs the hook PENUMBRA_DSM_VERTEX_CAPACITY
 #endif
 #ifndef PENUMBRA_DSM_RESOLUTION
 #error penumbra/deep_shadow_map/lookup.glsl needs the hook PENUMBRA_DSM_RESOLUTION
@@ -40,20 +46,26 @@ uvec2 penumbraDsmLevelStart(uint level) {
     return uvec2(base, word);
 }
 
+float penumbraDsmLookupZ(uint vertex) { return uintBitsToFloat(PENUMBRA_DSM_LOAD_WORD(vertex)); }
+float penumbraDsmLookupV(uint vertex, uint c) {
+    uint h = vertex * uint(PENUMBRA_DSM_CHANNELS) + c;
+    uint w = PENUMBRA_DSM_LOAD_WORD(uint(PENUMBRA_DSM_VERTEX_CAPACITY) + h / 2u);
+    return float((h & 1u) != 0u ? (w >> 16u) : (w & 0xFFFFu)) * (1.0 / 32768.0);
+}
+
 float penumbraDsmVisibilityAt(uvec2 start, uint texel, float z, uint c) {
-    uint F = uint(1 + PENUMBRA_DSM_CHANNELS);
     uint first = start.x + PENUMBRA_DSM_LOAD_OFFSET(start.y + texel);
     uint last = start.x + PENUMBRA_DSM_LOAD_OFFSET(start.y + texel + 1u);
     if (first == last) return 1.0;
     uint lo = first, hi = last;
     while (lo < hi) {
         uint mid = lo + (hi - lo) / 2u;
-        if (PENUMBRA_DSM_LOAD_FLOAT(F * mid) < z) lo = mid + 1u; else hi = mid;
+        if (penumbraDsmLookupZ(mid) < z) lo = mid + 1u; else hi = mid;
     }
-    if (lo == first) return PENUMBRA_DSM_LOAD_FLOAT(F * first + 1u + c);
-    if (lo == last) return PENUMBRA_DSM_LOAD_FLOAT(F * (last - 1u) + 1u + c);
-    float za = PENUMBRA_DSM_LOAD_FLOAT(F * (lo - 1u)), zb = PENUMBRA_DSM_LOAD_FLOAT(F * lo);
-    float va = PENUMBRA_DSM_LOAD_FLOAT(F * (lo - 1u) + 1u + c), vb = PENUMBRA_DSM_LOAD_FLOAT(F * lo + 1u + c);
+    if (lo == first) return penumbraDsmLookupV(first, c);
+    if (lo == last) return penumbraDsmLookupV(last - 1u, c);
+    float za = penumbraDsmLookupZ(lo - 1u), zb = penumbraDsmLookupZ(lo);
+    float va = penumbraDsmLookupV(lo - 1u, c), vb = penumbraDsmLookupV(lo, c);
     if (zb == z) return vb;
     precise float t = (z - za) / (zb - za);
     precise float v = va + (vb - va) * t;

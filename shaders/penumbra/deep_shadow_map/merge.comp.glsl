@@ -31,20 +31,32 @@ layout(std430, binding = PENUMBRA_DSM_BINDING_COUNTS) readonly buffer PenumbraDs
 layout(std430, binding = PENUMBRA_DSM_BINDING_RECORDS) readonly buffer PenumbraDsmRecords { uvec4 penumbraDsmRecords[]; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_STATUS) buffer PenumbraDsmStatus { uint penumbraDsmStatus[]; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_OFFSETS) buffer PenumbraDsmMapOffsets { uint penumbraDsmMapOffsets[]; };
-layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) writeonly buffer PenumbraDsmMapVertices { float penumbraDsmMapVertices[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) writeonly buffer PenumbraDsmMapVertices { uint penumbraDsmMapWords[]; };
 
 uint penumbraDsmOut = 0u;  // write pass: the texel's first vertex (floats / (1 + C))
 
 #if PENUMBRA_DSM_PASS == 1
+// Vertex words: z (float bits) at word `vertex`; V halfword h = vertex * C + c at word
+// capacity + h / 2 (low half first). A texel starts at an even vertex and writes an even count, so
+// its halfwords fill whole words: the low half waits in a register for its high half.
+uint penumbraDsmPendingHalf = 0u;
 void penumbraDsmStore(uint index, float z, float v[PENUMBRA_DSM_CHANNELS]) {
+    uint cap = penumbraDsmParams.capacity.y;
     uint vertex = penumbraDsmOut + index;
-    if (vertex >= penumbraDsmParams.capacity.y) {
+    if (vertex >= cap) {
         atomicAdd(penumbraDsmStatus[PENUMBRA_DSM_STATUS_VERTEX_OVERFLOW], 1u);
         return;
     }
-    uint f = vertex * uint(1 + PENUMBRA_DSM_CHANNELS);
-    penumbraDsmMapVertices[f] = z;
-    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) penumbraDsmMapVertices[f + 1u + uint(c)] = v[c];
+    penumbraDsmMapWords[vertex] = floatBitsToUint(z);
+    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+        uint h = vertex * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+        uint q = penumbraDsmQuantize(v[c]);
+        if ((h & 1u) == 0u) {
+            penumbraDsmPendingHalf = q;
+        } else {
+            penumbraDsmMapWords[cap + h / 2u] = penumbraDsmPendingHalf | (q << 16u);
+        }
+    }
 }
 #define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) penumbraDsmStore(index, z, v)
 #else

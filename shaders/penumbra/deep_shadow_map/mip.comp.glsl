@@ -7,6 +7,7 @@
 // penumbra-permutation: PENUMBRA_DSM_PASS=0 PENUMBRA_DSM_CHANNELS=1
 // penumbra-permutation: PENUMBRA_DSM_PASS=1 PENUMBRA_DSM_CHANNELS=3
 #include "penumbra/deep_shadow_map/deep_shadow_map_shared.h"
+#include "penumbra/deep_shadow_map/deep_shadow_map.glsl"
 
 #ifndef PENUMBRA_DSM_PASS
 #error penumbra/deep_shadow_map/mip.comp.glsl needs PENUMBRA_DSM_PASS (0 count, 1 write)
@@ -20,20 +21,32 @@ layout(local_size_x = PENUMBRA_DSM_GROUP_SIZE) in;
 layout(std140, binding = PENUMBRA_DSM_BINDING_PARAMS) uniform PenumbraDsmParamsBlock { PenumbraDsmParams penumbraDsmParams; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_STATUS) buffer PenumbraDsmStatus { uint penumbraDsmStatus[]; };
 layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_OFFSETS) buffer PenumbraDsmMapOffsets { uint penumbraDsmMapOffsets[]; };
-layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) buffer PenumbraDsmMapVertices { float penumbraDsmMapVertices[]; };
+layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) buffer PenumbraDsmMapVertices { uint penumbraDsmMapWords[]; };
 
 uint penumbraDsmOut = 0u;
 
 #if PENUMBRA_DSM_PASS == 1
+// Vertex words: z (float bits) at word `vertex`; V halfword h = vertex * C + c at word
+// capacity + h / 2 (low half first). A texel starts at an even vertex and writes an even count, so
+// its halfwords fill whole words: the low half waits in a register for its high half.
+uint penumbraDsmPendingHalf = 0u;
 void penumbraDsmStore(uint index, float z, float v[PENUMBRA_DSM_CHANNELS]) {
+    uint cap = penumbraDsmParams.capacity.y;
     uint vertex = penumbraDsmOut + index;
-    if (vertex >= penumbraDsmParams.capacity.y) {
+    if (vertex >= cap) {
         atomicAdd(penumbraDsmStatus[PENUMBRA_DSM_STATUS_VERTEX_OVERFLOW], 1u);
         return;
     }
-    uint f = vertex * PENUMBRA_DSM_F;
-    penumbraDsmMapVertices[f] = z;
-    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) penumbraDsmMapVertices[f + 1u + uint(c)] = v[c];
+    penumbraDsmMapWords[vertex] = floatBitsToUint(z);
+    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
+        uint h = vertex * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+        uint q = penumbraDsmQuantize(v[c]);
+        if ((h & 1u) == 0u) {
+            penumbraDsmPendingHalf = q;
+        } else {
+            penumbraDsmMapWords[cap + h / 2u] = penumbraDsmPendingHalf | (q << 16u);
+        }
+    }
 }
 #define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) penumbraDsmStore(index, z, v)
 #else
@@ -44,12 +57,14 @@ void penumbraDsmStore(uint index, float z, float v[PENUMBRA_DSM_CHANNELS]) {
 uint penumbraDsmFirst[4], penumbraDsmCount[4];
 
 float penumbraDsmVz(uint k, uint i) {
-    uint f = min((penumbraDsmFirst[k] + i), penumbraDsmParams.capacity.y - 1u) * PENUMBRA_DSM_F;
-    return penumbraDsmMapVertices[f];
+    uint vertex = min(penumbraDsmFirst[k] + i, penumbraDsmParams.capacity.y - 1u);
+    return uintBitsToFloat(penumbraDsmMapWords[vertex]);
 }
 float penumbraDsmVv(uint k, uint i, int c) {
-    uint f = min((penumbraDsmFirst[k] + i), penumbraDsmParams.capacity.y - 1u) * PENUMBRA_DSM_F;
-    return penumbraDsmMapVertices[f + 1u + uint(c)];
+    uint vertex = min(penumbraDsmFirst[k] + i, penumbraDsmParams.capacity.y - 1u);
+    uint h = vertex * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
+    uint w = penumbraDsmMapWords[penumbraDsmParams.capacity.y + h / 2u];
+    return penumbraDsmDecode((h & 1u) != 0u ? (w >> 16u) : (w & 0xFFFFu));
 }
 
 void main() {
