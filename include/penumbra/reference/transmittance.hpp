@@ -471,32 +471,11 @@ private:
         medium_ = medium;
     }
 
-    // VisibilityOracle::build's checks and triangle list (its build is private), then the same BVH.
+    // The oracle's input rules and triangle list (detail::oracle::oracleTriangles), then the same BVH.
     void buildMesh(const std::vector<glm::dvec3>& positions, const std::vector<uint32_t>& indices) {
-        namespace oracle = ::penumbra::detail::oracle;
-        PENUMBRA_CHECK(indices.size() % 3 == 0, "TransmittanceOracle: index count ", indices.size(),
-                       " is not a multiple of 3");
-        PENUMBRA_CHECK(indices.size() / 3 <= 0xffffffffull, "TransmittanceOracle: too many triangles (",
-                       indices.size() / 3, ")");
-        for (size_t i = 0; i < positions.size(); ++i) {
-            const glm::dvec3& p = positions[i];
-            PENUMBRA_CHECK(oracle::finiteBounded(p), "TransmittanceOracle: vertex ", i,
-                           " must be finite with |coordinate| <= ", oracle::kMaxCoordinate, " (got ", p.x, ", ", p.y,
-                           ", ", p.z, ")");
-        }
-        for (size_t k = 0; k < indices.size(); ++k) {
-            PENUMBRA_CHECK(indices[k] < positions.size(), "TransmittanceOracle: indices[", k, "] = ", indices[k],
-                           " is out of range (", positions.size(), " vertices)");
-        }
+        std::vector<::penumbra::detail::oracle::Triangle> triangles =
+            ::penumbra::detail::oracle::oracleTriangles(positions, indices, "TransmittanceOracle");
         triangle_count_ = indices.size() / 3;
-        std::vector<oracle::Triangle> triangles;
-        triangles.reserve(triangle_count_);
-        for (size_t i = 0; i < triangle_count_; ++i) {
-            const oracle::Triangle tri{positions[indices[3 * i]], positions[indices[3 * i + 1]],
-                                       positions[indices[3 * i + 2]], static_cast<uint32_t>(i)};
-            if (penumbra::detail::degenerateTriangle(tri.v0, tri.v1, tri.v2)) continue;
-            triangles.push_back(tri);
-        }
         linear_ = triangles;  // caller order, for the brute-force paths
         bvh_.build(std::move(triangles));
     }

@@ -729,6 +729,36 @@ inline void checkPoints(const std::vector<glm::dvec3>& points, const char* funct
     }
 }
 
+/// The oracle's input rules, shared by every oracle (`who` names the caller in the messages):
+/// index count a multiple of 3, at most 2^32 - 1 triangles, finite vertices with |coordinate| <=
+/// kMaxCoordinate, indices in range. Returns the non-degenerate triangles in caller order
+/// (Triangle::index = the caller's triangle index); degenerate ones never block (the one rule of
+/// detail/geometry.hpp, shared with the twins and the GPU).
+inline std::vector<Triangle> oracleTriangles(const std::vector<glm::dvec3>& positions, const std::vector<uint32_t>& indices,
+                                             const char* who) {
+    PENUMBRA_CHECK(indices.size() % 3 == 0, who, ": index count ", indices.size(), " is not a multiple of 3");
+    PENUMBRA_CHECK(indices.size() / 3 <= 0xffffffffull, who, ": too many triangles (", indices.size() / 3, ")");
+    for (size_t i = 0; i < positions.size(); ++i) {
+        const glm::dvec3& p = positions[i];
+        PENUMBRA_CHECK(finiteBounded(p), who, ": vertex ", i, " must be finite with |coordinate| <= ", kMaxCoordinate,
+                       " (got ", p.x, ", ", p.y, ", ", p.z, ")");
+    }
+    for (size_t k = 0; k < indices.size(); ++k) {
+        PENUMBRA_CHECK(indices[k] < positions.size(), who, ": indices[", k, "] = ", indices[k], " is out of range (",
+                       positions.size(), " vertices)");
+    }
+    const size_t count = indices.size() / 3;
+    std::vector<Triangle> triangles;
+    triangles.reserve(count);
+    for (size_t i = 0; i < count; ++i) {
+        const Triangle tri{positions[indices[3 * i]], positions[indices[3 * i + 1]], positions[indices[3 * i + 2]],
+                           static_cast<uint32_t>(i)};
+        if (penumbra::detail::degenerateTriangle(tri.v0, tri.v1, tri.v2)) continue;
+        triangles.push_back(tri);
+    }
+    return triangles;
+}
+
 }  // namespace oracle
 }  // namespace detail
 
@@ -815,31 +845,8 @@ public:
 
 private:
     void build(const std::vector<glm::dvec3>& positions, const std::vector<uint32_t>& indices) {
-        namespace oracle = detail::oracle;
-        PENUMBRA_CHECK(indices.size() % 3 == 0, "VisibilityOracle: index count ", indices.size(),
-                       " is not a multiple of 3");
-        PENUMBRA_CHECK(indices.size() / 3 <= 0xffffffffull, "VisibilityOracle: too many triangles (",
-                       indices.size() / 3, ")");
-        for (size_t i = 0; i < positions.size(); ++i) {
-            const glm::dvec3& p = positions[i];
-            PENUMBRA_CHECK(oracle::finiteBounded(p), "VisibilityOracle: vertex ", i,
-                           " must be finite with |coordinate| <= ", oracle::kMaxCoordinate, " (got ", p.x, ", ", p.y,
-                           ", ", p.z, ")");
-        }
-        for (size_t k = 0; k < indices.size(); ++k) {
-            PENUMBRA_CHECK(indices[k] < positions.size(), "VisibilityOracle: indices[", k, "] = ", indices[k],
-                           " is out of range (", positions.size(), " vertices)");
-        }
+        std::vector<detail::oracle::Triangle> triangles = detail::oracle::oracleTriangles(positions, indices, "VisibilityOracle");
         triangle_count_ = indices.size() / 3;
-        std::vector<oracle::Triangle> triangles;
-        triangles.reserve(triangle_count_);
-        for (size_t i = 0; i < triangle_count_; ++i) {
-            const oracle::Triangle tri{positions[indices[3 * i]], positions[indices[3 * i + 1]],
-                                       positions[indices[3 * i + 2]], static_cast<uint32_t>(i)};
-            // The one degenerate-triangle rule (detail/geometry.hpp), shared with the twins and the GPU.
-            if (penumbra::detail::degenerateTriangle(tri.v0, tri.v1, tri.v2)) continue;
-            triangles.push_back(tri);
-        }
         linear_ = triangles;  // caller order, for the brute-force paths
         bvh_.build(std::move(triangles));
     }
