@@ -26,29 +26,10 @@ layout(std430, binding = PENUMBRA_DSM_BINDING_MAP_VERTICES) buffer PenumbraDsmMa
 uint penumbraDsmOut = 0u;
 
 #if PENUMBRA_DSM_PASS == 1
-// Vertex words: z (float bits) at word `vertex`; V halfword h = vertex * C + c at word
-// capacity + h / 2 (low half first). A texel starts at an even vertex and writes an even count, so
-// its halfwords fill whole words: the low half waits in a register for its high half.
-uint penumbraDsmPendingHalf = 0u;
-void penumbraDsmStore(uint index, float z, float v[PENUMBRA_DSM_CHANNELS]) {
-    uint cap = penumbraDsmParams.capacity.y;
-    uint vertex = penumbraDsmOut + index;
-    if (vertex >= cap) {
-        atomicAdd(penumbraDsmStatus[PENUMBRA_DSM_STATUS_VERTEX_OVERFLOW], 1u);
-        return;
-    }
-    penumbraDsmMapWords[vertex] = floatBitsToUint(z);
-    for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) {
-        uint h = vertex * uint(PENUMBRA_DSM_CHANNELS) + uint(c);
-        uint q = penumbraDsmQuantize(v[c]);
-        if ((h & 1u) == 0u) {
-            penumbraDsmPendingHalf = q;
-        } else {
-            penumbraDsmMapWords[cap + h / 2u] = penumbraDsmPendingHalf | (q << 16u);
-        }
-    }
-}
-#define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) penumbraDsmStore(index, z, v)
+#define PENUMBRA_DSM_STORE_WORD(index, word) penumbraDsmMapWords[index] = (word)
+#define PENUMBRA_DSM_STORE_OVERFLOW() atomicAdd(penumbraDsmStatus[PENUMBRA_DSM_STATUS_VERTEX_OVERFLOW], 1u)
+#include "penumbra/deep_shadow_map/store.glsl"
+#define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) penumbraDsmStoreVertex(penumbraDsmOut + (index), penumbraDsmParams.capacity.y, z, v)
 #else
 #define PENUMBRA_DSM_COMPRESS_EMIT(index, z, v)
 #endif
