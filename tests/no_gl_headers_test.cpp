@@ -16,6 +16,7 @@
 #include <penumbra/reference/transmittance.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/sample_lists.hpp>
+#include <penumbra/shadow_edge_stencil.hpp>
 #include <penumbra/scan.hpp>
 
 #if defined(GL_VERSION_1_0) || defined(__gl_h_) || defined(__glad_h_) || defined(GLAD_GL_H_) || \

@@ -1,0 +1,761 @@
+// penumbra — eye-view anti-aliasing for irregular (alias-free) hard shadows (galoppo2010): which
+// pixels may be partly lit (the shadow-edge stencil), where their extra view samples go (shadow
+// sample splatting) and how per-sample states become fractional occlusion (resolve).
+//
+// Integration summary (this header is GL-free: pure setup and the CPU path; the per-sample states
+// come from the alias-free hard pipeline, penumbra/pipelines/alias_free_hard.hpp, GPU or CPU twin)
+//   needs:    the engine's per-pixel view samples (vec4 world position, w == 0: no surface) and face
+//             normals, the view (SampleListsView: size and inverse view-projection), the light
+//             (SampleListsLight, a view-projection seeing every sub-sample: aaFootprintBounds())
+//             and the casters (AfhCasters) — the same inputs the hard pipeline takes.
+//   produces: AaFootprints (the pixel's centre sample plus N sub-samples on the pixel's plane:
+//             aaSubSampleOffset() patterns, rotated grid by default), a 1-byte-per-pixel stencil
+//             (1 = multi-sample this pixel), the extended sample buffer the hard pipeline runs on
+//             (aaSampleBuffer: P centres, then N slots per pixel, w == 0 where a pixel keeps one
+//             sample) and the resolve (aaResolve: per pixel the mean of its samples' lit states).
+//   stencils: two, measured against each other:
+//     - provableEdgeStencilCpu (default): a pixel is left unflagged only when every caster
+//       triangle either blocks all of its K = N + 1 points or none of them (then their states,
+//       an OR over triangles, all agree) — so `--aa edge` equals `--aa full` bit for bit. Per
+//       (footprint, triangle) pair: a bounding-sphere test against the triangle's shadow volume
+//       (3 side planes through the light, the triangle's plane; + the reach plane for directional
+//       lights) decides most pairs with 4-5 dot products; undecided pairs run the hard pipeline's
+//       exact test (afhBlocks<double>) on the K points. A pixel some triangle covers entirely is
+//       fully shadowed whatever else splits it (no flag). This is a footprint-level irregular
+//       z-buffer pass: it also yields the unflagged pixels' state, so it can replace the
+//       single-sample pass.
+//     - chebyshevEdgeStencilCpu (galoppo2010 Listing 1.6.1): a conservative moment map (each light
+//       texel holds the minimum caster depth over its area — conservative raster, Fig. 1.6.8 — as
+//       E(x), E(x^2), mip-mapped) read at the level the pixel's light-space footprint fits; the
+//       pixel stays unflagged when a one-tailed Chebyshev bound says it is fully lit or fully
+//       shadowed with probability >= 1 - threshold. A probability, not a proof: its misses are
+//       counted against the oracle (the receiver itself lies in the map, so the lit test compares
+//       against t_min minus a multiple of its own depth spread; see ChebyshevStencilOptions).
+//   sub-samples: each on the plane through the centre sample with the pixel's face normal, where the
+//       sub-pixel's eye ray meets it (galoppo2010 "Shadow Sample Splatting"); a grazing plane is
+//       limited to kAaMaxStretch fronto-parallel pixel widths from the centre (documented
+//       fallback: the centre itself when the ray misses the plane).
+//   lights: point (light.w = 1) or directional (w = 0, options.directional_reach > 0), as the
+//       hard pipeline; samples' back-facing state uses the sample lists' own test.
+#ifndef PENUMBRA_SHADOW_EDGE_STENCIL_HPP
+#define PENUMBRA_SHADOW_EDGE_STENCIL_HPP
+
+#include "penumbra/error.hpp"
+#include "penumbra/pipelines/alias_free_hard.hpp"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace penumbra {
+
+enum class AaPattern { RotatedGrid, Jittered };
+enum class AaMode { Off, Edge, Full };
+
+inline constexpr uint32_t kAaMaxSamples = 64;
+inline constexpr double kAaMaxStretch = 8.0;  ///< sub-sample distance limit, in fronto-parallel pixel widths
+
+/// Value-initialised = rotated grid 4x.
+struct AaPatternOptions {
+    uint32_t samples = 4;  ///< N sub-samples per flagged pixel, in [1, kAaMaxSamples]
+    AaPattern pattern = AaPattern::RotatedGrid;
+    uint32_t seed = 0;     ///< jittered: the hash seed (one pattern per pixel)
+};
+
+inline void checkAaPatternOptions(const AaPatternOptions& o) {
+    PENUMBRA_CHECK(o.samples >= 1 && o.samples <= kAaMaxSamples, "penumbra::AaPatternOptions: samples = ", o.samples,
+                   " is outside [1, ", kAaMaxSamples, "]");
+}
+
+namespace detail {
+/// N = a x b with a the largest divisor <= sqrt(N): the pattern's strata.
+inline std::pair<uint32_t, uint32_t> aaStrata(uint32_t n) {
+    uint32_t a = 1;
+    for (uint32_t d = 1; d * d <= n; ++d)
+        if (n % d == 0) a = d;
+    return {a, n / a};
+}
+inline uint32_t aaHash(uint32_t x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+}  // namespace detail
+
+/// Offset of sub-sample k of pixel `pixel` from the pixel centre, in pixels, inside (-0.5, 0.5)^2.
+/// Rotated grid: the a x b grid of the strata rotated into N-rooks positions (every column and
+/// every row of the N x N sub-grid holds one sample; 4x is the classic RGSS pattern
+/// (+-1/8, +-3/8)). Jittered: one uniformly jittered point per a x b stratum, per pixel. Offsets
+/// are dyadic for the rotated grid (exact in float).
+inline glm::vec2 aaSubSampleOffset(const AaPatternOptions& o, uint32_t pixel, uint32_t k) {
+    const auto [a, b] = detail::aaStrata(o.samples);
+    const uint32_t i = k / b, j = k % b;  // i in [0, a), j in [0, b)
+    const float n = float(o.samples);
+    if (o.pattern == AaPattern::RotatedGrid) {
+        const uint32_t x = i * b + j, y = j * a + (a - 1 - i);
+        return {(float(x) + 0.5f) / n - 0.5f, (float(y) + 0.5f) / n - 0.5f};
+    }
+    const uint32_t h = detail::aaHash(pixel * 0x9e3779b9u ^ detail::aaHash(k + 0x632be5abu * (o.seed + 1u)));
+    const float jx = float(h & 0xffffu) / 65536.0f, jy = float(h >> 16) / 65536.0f;
+    return {(float(j) + jx) / float(b) - 0.5f, (float(i) + jy) / float(a) - 0.5f};
+}
+
+/// One pixel's centre sample and its N sub-samples, all pixels of a view.
+struct AaFootprints {
+    uint32_t pixels = 0, samples = 0;       ///< P pixels, N sub-samples each
+    std::vector<glm::vec4> centres;         ///< [P] the engine's view samples (w == 0: none)
+    std::vector<glm::vec4> normals;         ///< [P] face normals (xyz)
+    std::vector<glm::vec4> sub_samples;     ///< [P * N] sub-sample k of pixel i at i * N + k (w == 0 with no centre)
+    uint64_t stretched = 0;                 ///< sub-samples limited to kAaMaxStretch pixel widths (grazing planes)
+    uint64_t fallbacks = 0;                 ///< sub-samples whose ray missed the plane: the centre itself
+    const glm::vec4* subSamples(uint32_t pixel) const { return sub_samples.data() + size_t(pixel) * samples; }
+};
+
+namespace detail {
+inline glm::dvec3 aaUnproject(const glm::dmat4& inverse, double x, double y, double z) {
+    const glm::dvec4 h = inverse * glm::dvec4(x, y, z, 1.0);
+    return glm::dvec3(h) / h.w;
+}
+}  // namespace detail
+
+/// Sub-samples on each pixel's plane (see the header comment). centres/normals: view.width *
+/// view.height entries, row-major from the bottom row (GL's order); normals need not be unit.
+/// Throws penumbra::Error for an empty view or a non-finite inverse view-projection.
+inline AaFootprints aaFootprintsCpu(const SampleListsView& view, const glm::vec4* centres, const glm::vec4* normals,
+                                    const AaPatternOptions& pattern) {
+    checkAaPatternOptions(pattern);
+    PENUMBRA_CHECK(view.width > 0 && view.height > 0, "penumbra::aaFootprintsCpu: empty view ", view.width, "x", view.height);
+    PENUMBRA_CHECK(centres && normals, "penumbra::aaFootprintsCpu: centres and normals must not be null");
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            PENUMBRA_CHECK(std::isfinite(view.inverse_view_projection[c][r]),
+                           "penumbra::aaFootprintsCpu: the inverse view-projection is not finite");
+    AaFootprints f;
+    f.pixels = view.width * view.height;
+    f.samples = pattern.samples;
+    f.centres.assign(centres, centres + f.pixels);
+    f.normals.assign(normals, normals + f.pixels);
+    f.sub_samples.assign(size_t(f.pixels) * f.samples, glm::vec4(0.0f));
+    const glm::dmat4 inverse(view.inverse_view_projection);
+    const double z_near = view.depth_zero_to_one ? 0.0 : -1.0;
+    for (uint32_t y = 0; y < view.height; ++y) {
+        for (uint32_t x = 0; x < view.width; ++x) {
+            const uint32_t i = y * view.width + x;
+            const glm::vec4 c4 = centres[i];
+            if (c4.w == 0.0f) continue;
+            const glm::dvec3 c(c4), n(normals[i]);
+            const auto ray = [&](double px, double py, glm::dvec3& origin, glm::dvec3& dir) {
+                const double nx = px / view.width * 2.0 - 1.0, ny = py / view.height * 2.0 - 1.0;
+                origin = detail::aaUnproject(inverse, nx, ny, z_near);
+                dir = detail::aaUnproject(inverse, nx, ny, 1.0) - origin;
+            };
+            glm::dvec3 o0, d0;
+            ray(x + 0.5, y + 0.5, o0, d0);
+            const double s0 = glm::dot(c - o0, d0) / glm::dot(d0, d0);  // the centre's parameter on its own ray
+            for (uint32_t k = 0; k < f.samples; ++k) {
+                const glm::vec2 off = aaSubSampleOffset(pattern, i, k);
+                glm::dvec3 o, d;
+                ray(x + 0.5 + off.x, y + 0.5 + off.y, o, d);
+                const double dn = glm::dot(n, d);
+                const double t = glm::dot(n, c - o) / dn;
+                glm::dvec3 q = c;
+                if (dn != 0.0 && std::isfinite(t) && t > 0.0) {
+                    q = o + t * d;
+                    // Grazing planes: at most kAaMaxStretch fronto-parallel pixel widths away.
+                    const double fronto = glm::length(o + s0 * d - c);
+                    const double reach = kAaMaxStretch * fronto;
+                    const double dist = glm::length(q - c);
+                    if (dist > reach && dist > 0.0) {
+                        q = c + (q - c) * (reach / dist);
+                        ++f.stretched;
+                    }
+                } else {
+                    ++f.fallbacks;
+                }
+                f.sub_samples[size_t(i) * f.samples + k] = glm::vec4(glm::vec3(q), 1.0f);
+            }
+        }
+    }
+    return f;
+}
+
+/// The box of every centre and sub-sample (pass it to lightViewProjectionForBounds: the light
+/// must see the sub-samples too). `count` = surface pixels.
+inline std::pair<glm::vec3, glm::vec3> aaFootprintBounds(const AaFootprints& f, size_t* count = nullptr) {
+    auto [lo, hi] = viewSampleBounds(f.centres.data(), f.centres.size(), count);
+    size_t subs = 0;
+    auto [slo, shi] = viewSampleBounds(f.sub_samples.data(), f.sub_samples.size(), &subs);
+    if (subs > 0) {
+        lo = glm::min(lo, slo);
+        hi = glm::max(hi, shi);
+    }
+    return {lo, hi};
+}
+
+/// The extended sample buffer: [0, P) the centres, then pixel i's N sub-samples at P + i * N + k,
+/// present when `flags` is null (full) or flags[i] != 0 (w == 0 otherwise: the lists skip them).
+/// Normals: each sample carries its pixel's.
+inline void aaSampleBuffer(const AaFootprints& f, const uint8_t* flags, std::vector<glm::vec4>& positions,
+                           std::vector<glm::vec4>& normals) {
+    const size_t p = f.pixels, n = f.samples;
+    positions.assign(p * (1 + n), glm::vec4(0.0f));
+    normals.assign(p * (1 + n), glm::vec4(0.0f));
+    for (size_t i = 0; i < p; ++i) {
+        positions[i] = f.centres[i];
+        normals[i] = f.normals[i];
+        if (flags && !flags[i]) continue;
+        for (size_t k = 0; k < n; ++k) {
+            positions[p + i * n + k] = f.sub_samples[i * n + k];
+            normals[p + i * n + k] = f.normals[i];
+        }
+    }
+}
+
+/// Per pixel: the fraction of its samples the hard pipeline found lit (PENUMBRA_AFH_LIT), from
+/// states of aaSampleBuffer's layout. Off: the centre's state; Full: the mean of the N
+/// sub-samples; Edge: the mean where flags[i] != 0, else the centre's state. N a power of two
+/// makes the means exact, so Edge and Full agree bit for bit wherever their sample states agree.
+inline std::vector<float> aaResolve(AaMode mode, const std::vector<uint32_t>& states, uint32_t pixels, uint32_t samples,
+                                    const uint8_t* flags = nullptr) {
+    PENUMBRA_CHECK(states.size() >= (mode == AaMode::Off ? size_t(pixels) : size_t(pixels) * (1 + samples)),
+                   "penumbra::aaResolve: ", states.size(), " states for ", pixels, " pixels x ", samples, " samples");
+    PENUMBRA_CHECK(mode != AaMode::Edge || flags, "penumbra::aaResolve: edge mode needs the stencil");
+    std::vector<float> lit(pixels);
+    for (uint32_t i = 0; i < pixels; ++i) {
+        if (mode == AaMode::Off || (mode == AaMode::Edge && !flags[i])) {
+            lit[i] = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
+            continue;
+        }
+        uint32_t count = 0;
+        for (uint32_t k = 0; k < samples; ++k) count += states[pixels + size_t(i) * samples + k] == PENUMBRA_AFH_LIT;
+        lit[i] = float(count) / float(samples);
+    }
+    return lit;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The provable stencil
+
+/// What the provable stencil found (per pixel flags plus work counters).
+struct ProvableStencilCpu {
+    std::vector<uint8_t> flags;     ///< 1 = multi-sample (some triangle splits the footprint, none covers it)
+    std::vector<uint8_t> shadowed;  ///< unflagged pixels: 1 = every point shadowed (a cover or all back-facing)
+    uint64_t pairs = 0;             ///< (footprint, triangle) pairs classified
+    uint64_t sphere_decided = 0;    ///< ... decided by the bounding-sphere test alone
+    uint64_t exact_tests = 0;       ///< exact point tests of the undecided pairs
+    uint64_t outside = 0;           ///< footprints with a point outside the light frustum (flagged)
+    uint64_t mixed_facing = 0;      ///< footprints whose points disagree on facing the light (flagged)
+};
+
+namespace detail {
+/// The sample lists' back-facing test (classifySample), step for step.
+inline bool aaBackFacing(const glm::vec4& light, const glm::vec4& p, const glm::vec3& normal) {
+    const float lx = light.w == 0.0f ? light.x : light.x - p.x;
+    const float ly = light.w == 0.0f ? light.y : light.y - p.y;
+    const float lz = light.w == 0.0f ? light.z : light.z - p.z;
+    float facing = mulRounded(normal.x, lx) + mulRounded(normal.y, ly);
+    facing = facing + mulRounded(normal.z, lz);
+    return !(facing > 0.0f);
+}
+
+/// A triangle's shadow volume as up to 5 unit-normal planes (positive inside): the 3 side planes
+/// through the light (or along the light direction), the triangle's plane (positive beyond it),
+/// and for a directional light the reach plane. valid = false: no shortcut (edge-on triangle,
+/// light near its plane); the exact test decides every point.
+struct AaShadowVolume {
+    glm::dvec4 planes[5];
+    int count = 0;
+    bool valid = false;
+    bool blocks_nothing = false;  ///< the light lies exactly in the triangle's plane: afhBlocks is false everywhere
+};
+
+inline AaShadowVolume aaShadowVolume(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::vec4& light,
+                                     double reach) {
+    AaShadowVolume v;
+    const bool point = light.w != 0.0f;
+    const glm::dvec3 l(light);
+    const glm::dvec3 nt = glm::cross(b - a, c - a);
+    const double nt_len = glm::length(nt);
+    if (!(nt_len > 0.0)) return v;
+    const glm::dvec3 u = nt / nt_len;
+    const glm::dvec3 corners[3] = {a, b, c};
+    for (int e = 0; e < 3; ++e) {
+        const glm::dvec3& p0 = corners[e];
+        const glm::dvec3& p1 = corners[(e + 1) % 3];
+        const glm::dvec3& opposite = corners[(e + 2) % 3];
+        const glm::dvec3 m = point ? glm::cross(p0 - l, p1 - l) : glm::cross(p1 - p0, l);
+        const double len = glm::length(m);
+        if (!(len > 0.0)) return v;
+        glm::dvec3 mu = m / len;
+        const double side = glm::dot(mu, opposite - p0);
+        if (side == 0.0) return v;  // edge-on from the light
+        if (side < 0.0) mu = -mu;
+        v.planes[e] = glm::dvec4(mu, -glm::dot(mu, p0));
+    }
+    if (point) {
+        const double dl = glm::dot(u, l - a);
+        if (dl == 0.0) {
+            v.blocks_nothing = true;
+            return v;
+        }
+        const glm::dvec3 beyond = dl > 0.0 ? -u : u;
+        v.planes[3] = glm::dvec4(beyond, -glm::dot(beyond, a));
+        v.count = 4;
+    } else {
+        const double dd = glm::dot(u, l);
+        if (dd == 0.0) {
+            v.blocks_nothing = true;
+            return v;
+        }
+        const glm::dvec3 beyond = dd > 0.0 ? -u : u;  // behind the triangle seen along the light
+        v.planes[3] = glm::dvec4(beyond, -glm::dot(beyond, a));
+        // Within reach: distance beyond the plane < reach * |u . d|.
+        v.planes[4] = glm::dvec4(-beyond, glm::dot(beyond, a) + reach * std::abs(dd));
+        v.count = 5;
+    }
+    v.valid = true;
+    return v;
+}
+
+inline double aaPlaneDistance(const glm::dvec4& plane, const glm::dvec3& p) {
+    return glm::dot(glm::dvec3(plane), p) + plane.w;
+}
+}  // namespace detail
+
+/// The provable shadow-edge stencil (see the header comment). `options` gives the exact test's
+/// coplanar epsilon, the directional reach and the caster culling (light_facing_only /
+/// back_faces_only) of the hard pipeline whose states it must reproduce; `light.view_projection`
+/// must see every centre and sub-sample (aaFootprintBounds); the binning grid is
+/// options.grid_width x grid_height. Sample offsets (options.sample_offset) are not supported
+/// (exact geometry only).
+inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& options, const SampleListsLight& light,
+                                                 const AaFootprints& f, const AfhCasters& casters,
+                                                 bool cull_back_facing = true) {
+    validateAliasFreeHardOptions(options, light.light);
+    PENUMBRA_CHECK(options.precision == AfhPrecision::Exact && options.sample_offset == 0.0f,
+                   "penumbra::provableEdgeStencilCpu: needs the exact hard pipeline (precision Exact, sample_offset 0)");
+    PENUMBRA_CHECK(casters.positions && casters.indices && casters.closed &&
+                       casters.closed->size() * 3 == casters.indices->size(),
+                   "penumbra::provableEdgeStencilCpu: casters need positions, indices and one closed flag per triangle");
+    PENUMBRA_CHECK(f.centres.size() == f.pixels && f.sub_samples.size() == size_t(f.pixels) * f.samples,
+                   "penumbra::provableEdgeStencilCpu: inconsistent footprints");
+    ProvableStencilCpu out;
+    out.flags.assign(f.pixels, 0);
+    out.shadowed.assign(f.pixels, 0);
+    const uint32_t gw = options.grid_width, gh = options.grid_height;
+    const uint32_t k_points = f.samples + 1;
+    const bool point = light.light.w != 0.0f;
+    const double reach = options.directional_reach;
+    const double eps = options.coplanar_epsilon;
+
+    // Bin each footprint into every light texel its points' box touches.
+    std::vector<std::vector<uint32_t>> bins(size_t(gw) * gh);
+    std::vector<glm::dvec3> centre(f.pixels);
+    std::vector<double> radius(f.pixels, 0.0);
+    std::vector<uint8_t> active(f.pixels, 0);  // 1: classify against the casters
+    std::vector<uint8_t> split(f.pixels, 0), covered(f.pixels, 0);
+    for (uint32_t i = 0; i < f.pixels; ++i) {
+        if (f.centres[i].w == 0.0f) continue;
+        const glm::vec3 n(f.normals[i]);
+        const glm::vec4* subs = f.subSamples(i);
+        // Facing: the lists reject light-back-facing samples (state BACK_FACING, not lit).
+        if (cull_back_facing) {
+            uint32_t back = detail::aaBackFacing(light.light, f.centres[i], n);
+            for (uint32_t k = 0; k < f.samples; ++k) back += detail::aaBackFacing(light.light, subs[k], n);
+            if (back == k_points) {
+                out.shadowed[i] = 1;
+                continue;
+            }
+            if (back != 0) {
+                out.flags[i] = 1;
+                ++out.mixed_facing;
+                continue;
+            }
+        }
+        glm::dvec2 lo(1e300), hi(-1e300);
+        bool inside = true;
+        centre[i] = glm::dvec3(f.centres[i]);
+        for (uint32_t k = 0; k < k_points; ++k) {
+            const glm::vec4 p = k == 0 ? f.centres[i] : subs[k - 1];
+            radius[i] = std::max(radius[i], glm::length(glm::dvec3(p) - centre[i]));
+            const glm::dvec4 clip = glm::dmat4(light.view_projection) * glm::dvec4(glm::dvec3(p), 1.0);
+            if (!(clip.w > 0.0)) {
+                inside = false;
+                break;
+            }
+            const glm::dvec2 g((clip.x / clip.w * 0.5 + 0.5) * gw, (clip.y / clip.w * 0.5 + 0.5) * gh);
+            if (!(g.x >= 0.0 && g.x <= gw && g.y >= 0.0 && g.y <= gh)) {
+                inside = false;
+                break;
+            }
+            lo = glm::min(lo, g);
+            hi = glm::max(hi, g);
+        }
+        if (!inside) {
+            out.flags[i] = 1;
+            ++out.outside;
+            continue;
+        }
+        active[i] = 1;
+        // One texel of slack on every side: float rounding of the projection.
+        const int x0 = std::max(0, int(std::floor(lo.x)) - 1), y0 = std::max(0, int(std::floor(lo.y)) - 1);
+        const int x1 = std::min(int(gw) - 1, int(std::floor(hi.x)) + 1), y1 = std::min(int(gh) - 1, int(std::floor(hi.y)) + 1);
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) bins[size_t(y) * gw + x].push_back(i);
+    }
+
+    const ConservativeRasterSetup cr = afhConservativeSetup(options);
+    const auto& P = *casters.positions;
+    const auto& I = *casters.indices;
+    std::vector<uint32_t> stamp(f.pixels, std::numeric_limits<uint32_t>::max());
+    std::vector<uint8_t> blocked(k_points);
+    for (size_t t = 0; t < casters.closed->size(); ++t) {
+        const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
+        const glm::dvec3 a(v[0]), b(v[1]), c(v[2]);
+        if (detail::degenerateTriangle(a, b, c)) continue;
+        if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
+        const glm::vec4 clip[3] = {light.view_projection * glm::vec4(v[0], 1.0f), light.view_projection * glm::vec4(v[1], 1.0f),
+                                   light.view_projection * glm::vec4(v[2], 1.0f)};
+        const std::vector<glm::dvec2> polygon = conservativeReferencePolygon(clip[0], clip[1], clip[2], cr);
+        if (polygon.empty()) continue;
+        glm::dvec2 lo(1e300), hi(-1e300);
+        for (const auto& q : polygon) {
+            lo = glm::min(lo, q);
+            hi = glm::max(hi, q);
+        }
+        const int x0 = std::max(0, int(std::floor(lo.x)) - 1), y0 = std::max(0, int(std::floor(lo.y)) - 1);
+        const int x1 = std::min(int(gw) - 1, int(std::floor(hi.x)) + 1), y1 = std::min(int(gh) - 1, int(std::floor(hi.y)) + 1);
+        if (x0 > x1 || y0 > y1) continue;
+        const detail::AaShadowVolume volume = detail::aaShadowVolume(a, b, c, light.light, reach);
+        if (volume.blocks_nothing) continue;
+        const double tri_scale = std::max(glm::length(b - a), std::max(glm::length(c - a), glm::length(c - b)));
+        for (int y = y0; y <= y1; ++y) {
+            for (int x = x0; x <= x1; ++x) {
+                for (const uint32_t i : bins[size_t(y) * gw + x]) {
+                    if (stamp[i] == uint32_t(t) || covered[i]) continue;
+                    stamp[i] = uint32_t(t);
+                    ++out.pairs;
+                    const double r = radius[i];
+                    if (volume.valid) {
+                        // Margins: the exact test's coplanar tolerance (eps * its scale) and rounding.
+                        const glm::dvec3& q = centre[i];
+                        const double scale = glm::length(a - q) + tri_scale + r +
+                                             (point ? glm::length(glm::dvec3(light.light) - q) : reach);
+                        const double margin = r + (2.0 * eps + 1e-9) * scale;
+                        bool all_inside = true, outside = false;
+                        for (int k = 0; k < volume.count; ++k) {
+                            const double d = detail::aaPlaneDistance(volume.planes[k], q);
+                            if (d < -margin) outside = true;
+                            if (!(d > margin)) all_inside = false;
+                        }
+                        // A point light within the margin of the triangle's plane: the exact test's
+                        // endpoint rule may apply; leave it to the exact test.
+                        if (all_inside && point &&
+                            std::abs(detail::aaPlaneDistance(volume.planes[3], glm::dvec3(light.light))) <= margin)
+                            all_inside = false;
+                        if (outside) {
+                            ++out.sphere_decided;
+                            continue;
+                        }
+                        if (all_inside) {
+                            ++out.sphere_decided;
+                            covered[i] = 1;
+                            continue;
+                        }
+                    }
+                    uint32_t count = 0;
+                    const glm::vec4* subs = f.subSamples(i);
+                    for (uint32_t k = 0; k < k_points; ++k) {
+                        const glm::dvec3 p(glm::vec3(k == 0 ? f.centres[i] : subs[k - 1]));
+                        const glm::dvec3 l = point ? glm::dvec3(light.light) : p + detail::mulRounded(glm::dvec3(light.light), reach);
+                        blocked[k] = afhBlocks<double>(a, b, c, p, l, eps, 0.0) ? 1 : 0;
+                        count += blocked[k];
+                    }
+                    out.exact_tests += k_points;
+                    if (count == k_points) covered[i] = 1;
+                    else if (count != 0) split[i] = 1;
+                }
+            }
+        }
+    }
+    for (uint32_t i = 0; i < f.pixels; ++i) {
+        if (!active[i]) continue;
+        if (covered[i]) out.shadowed[i] = 1;
+        else if (split[i]) out.flags[i] = 1;
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Chebyshev (variance shadow map) stencil
+
+/// Conservative moment map: level 0 holds, per light texel, (d, d^2) of the minimum caster depth
+/// over the texel's area (every texel a caster touches: conservative raster), d = -1/w for a
+/// perspective light (affine in screen space on a plane, increasing with distance), z_ndc for an
+/// orthographic one; texels no caster touches hold d_far (beyond every sample). Levels average
+/// 2x2 (odd sizes: the last row/column repeats), down to 1x1.
+struct MomentMapCpu {
+    uint32_t width = 0, height = 0;
+    bool perspective = true;
+    float d_far = 0.0f;
+    std::vector<std::vector<glm::vec2>> levels;
+    /// Inner coverage (the "underestimate" the shadowed claim can rest on): per texel the least,
+    /// over caster triangles whose projection contains the whole texel, of the triangle's largest
+    /// depth over it (+inf: no such triangle); coarser levels take the largest of their 2x2.
+    std::vector<std::vector<float>> cover;
+    uint32_t levelWidth(uint32_t l) const { return std::max(1u, width >> l); }
+    uint32_t levelHeight(uint32_t l) const { return std::max(1u, height >> l); }
+};
+
+namespace detail {
+inline double aaLightDepth(const glm::dvec4& clip, bool perspective) { return perspective ? -1.0 / clip.w : clip.z / clip.w; }
+}  // namespace detail
+
+/// Builds the moment map over options.grid_width x grid_height with light.view_projection (the
+/// same frustum the stencil reads with), casters culled as the hard pipeline culls them.
+inline MomentMapCpu conservativeMomentMapCpu(const AliasFreeHardOptions& options, const SampleListsLight& light,
+                                             const AfhCasters& casters) {
+    validateAliasFreeHardOptions(options, light.light);
+    PENUMBRA_CHECK(casters.positions && casters.indices && casters.closed &&
+                       casters.closed->size() * 3 == casters.indices->size(),
+                   "penumbra::conservativeMomentMapCpu: casters need positions, indices and one closed flag per triangle");
+    MomentMapCpu m;
+    m.width = options.grid_width;
+    m.height = options.grid_height;
+    m.perspective = light.light.w != 0.0f;
+    m.d_far = m.perspective ? 0.0f : 2.0f;  // -1/w < 0 in front of a perspective light; z_ndc <= 1
+    std::vector<double> depth(size_t(m.width) * m.height, double(m.d_far));
+    std::vector<double> cover(depth.size(), std::numeric_limits<double>::infinity());
+    const ConservativeRasterSetup cr = afhConservativeSetup(options);
+    const glm::dmat4 vp(light.view_projection);
+    const auto& P = *casters.positions;
+    const auto& I = *casters.indices;
+    for (size_t t = 0; t < casters.closed->size(); ++t) {
+        const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
+        if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
+        if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
+        const glm::vec4 clip[3] = {light.view_projection * glm::vec4(v[0], 1.0f), light.view_projection * glm::vec4(v[1], 1.0f),
+                                   light.view_projection * glm::vec4(v[2], 1.0f)};
+        const std::vector<glm::dvec2> polygon = conservativeReferencePolygon(clip[0], clip[1], clip[2], cr);
+        if (polygon.empty()) continue;
+        // Depth plane d(x, y) in texel coordinates (d = -1/w is affine in screen space on a plane):
+        // fitted to the triangle clipped to w >= w_min (a caster reaching behind the light keeps the
+        // exact depths of its part in front); the minimum also bounded by the clipped vertices'.
+        glm::dvec4 h[3];
+        double w_max = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            h[k] = vp * glm::dvec4(glm::dvec3(v[k]), 1.0);
+            w_max = std::max(w_max, h[k].w);
+        }
+        if (!(w_max > 0.0)) continue;
+        const double w_min = m.perspective ? 1e-4 * w_max : -1e300;
+        std::vector<glm::dvec3> s;  // (x, y, d) of the clipped polygon
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec4& a = h[k];
+            const glm::dvec4& b = h[(k + 1) % 3];
+            const auto emit = [&](const glm::dvec4& c) {
+                s.emplace_back((c.x / c.w * 0.5 + 0.5) * m.width, (c.y / c.w * 0.5 + 0.5) * m.height,
+                               detail::aaLightDepth(c, m.perspective));
+            };
+            if (a.w >= w_min) emit(a);
+            if ((a.w >= w_min) != (b.w >= w_min)) emit(a + (b - a) * ((w_min - a.w) / (b.w - a.w)));
+        }
+        if (s.size() < 3) continue;
+        double dmin = std::numeric_limits<double>::infinity(), dmax = -dmin, area = 0.0;
+        for (size_t j = 0; j < s.size(); ++j) {
+            dmin = std::min(dmin, s[j].z);
+            dmax = std::max(dmax, s[j].z);
+            const glm::dvec3& q = s[(j + 1) % s.size()];
+            area += s[j].x * q.y - q.x * s[j].y;
+        }
+        const double orientation = area > 0.0 ? 1.0 : -1.0;
+        double ga = 0.0, gb = 0.0, g0 = dmin, best = 0.0;
+        for (size_t j = 1; j + 1 < s.size(); ++j) {
+            const glm::dvec3 e1 = s[j] - s[0], e2 = s[j + 1] - s[0];
+            const double det = e1.x * e2.y - e1.y * e2.x;
+            if (std::abs(det) > best) {
+                best = std::abs(det);
+                ga = (e1.z * e2.y - e2.z * e1.y) / det;
+                gb = (e2.z * e1.x - e1.z * e2.x) / det;
+                g0 = s[0].z - ga * s[0].x - gb * s[0].y;
+            }
+        }
+        if (best == 0.0) ga = gb = 0.0, g0 = dmin;  // edge-on from the light: the vertices' minimum
+        glm::dvec2 lo(1e300), hi(-1e300);
+        for (const auto& q : polygon) {
+            lo = glm::min(lo, q);
+            hi = glm::max(hi, q);
+        }
+        const int x0 = std::max(0, int(std::floor(lo.x))), y0 = std::max(0, int(std::floor(lo.y)));
+        const int x1 = std::min(int(m.width) - 1, int(std::floor(hi.x))), y1 = std::min(int(m.height) - 1, int(std::floor(hi.y)));
+        for (int y = y0; y <= y1; ++y) {
+            for (int x = x0; x <= x1; ++x) {
+                if (!polygonTouchesPixel(polygon.data(), polygon.size(), x, y)) continue;
+                // The plane's minimum over the texel square (a corner), no lower than the clipped
+                // triangle's nearest vertex; minus a relative rounding margin.
+                const double corner = g0 + std::min(ga * x, ga * (x + 1)) + std::min(gb * y, gb * (y + 1));
+                double d = std::max(corner, dmin);
+                d -= 1e-6 * (std::abs(d) + std::abs(ga) + std::abs(gb));
+                double& texel = depth[size_t(y) * m.width + x];
+                texel = std::min(texel, d);
+                // Inner coverage: every corner strictly inside the clipped triangle (convex).
+                bool inside = true;
+                for (int k = 0; k < 4 && inside; ++k) {
+                    const double cx = x + (k & 1), cy = y + (k >> 1);
+                    for (size_t j = 0; j < s.size() && inside; ++j) {
+                        const glm::dvec3& a = s[j];
+                        const glm::dvec3& b = s[(j + 1) % s.size()];
+                        const double e = (b.x - a.x) * (cy - a.y) - (b.y - a.y) * (cx - a.x);
+                        const double scale = std::abs(b.x - a.x) + std::abs(b.y - a.y) + std::abs(cx - a.x) + std::abs(cy - a.y);
+                        if (!(e * orientation > 1e-9 * scale * scale)) inside = false;
+                    }
+                }
+                if (inside) {
+                    const double far_corner = g0 + std::max(ga * x, ga * (x + 1)) + std::max(gb * y, gb * (y + 1));
+                    double c = std::min(far_corner, dmax);
+                    c += 1e-6 * (std::abs(c) + std::abs(ga) + std::abs(gb));
+                    double& covered = cover[size_t(y) * m.width + x];
+                    covered = std::min(covered, c);
+                }
+            }
+        }
+    }
+    m.cover.emplace_back(cover.begin(), cover.end());  // +inf stays +inf in float
+    m.levels.emplace_back(depth.size());
+    for (size_t i = 0; i < depth.size(); ++i) {
+        const double d = depth[i];
+        m.levels[0][i] = glm::vec2(float(d), float(d * d));
+    }
+    for (uint32_t l = 1; m.levelWidth(l - 1) > 1 || m.levelHeight(l - 1) > 1; ++l) {
+        const uint32_t pw = m.levelWidth(l - 1), ph = m.levelHeight(l - 1), w = m.levelWidth(l), h = m.levelHeight(l);
+        const std::vector<glm::vec2>& prev = m.levels[l - 1];
+        std::vector<glm::vec2> next(size_t(w) * h);
+        std::vector<float> next_cover(size_t(w) * h);
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) {
+                glm::dvec2 sum(0.0);
+                float covered = -std::numeric_limits<float>::infinity();
+                for (uint32_t k = 0; k < 4; ++k) {
+                    const uint32_t sx = std::min(pw - 1, 2 * x + (k & 1)), sy = std::min(ph - 1, 2 * y + (k >> 1));
+                    sum += glm::dvec2(prev[size_t(sy) * pw + sx]);
+                    covered = std::max(covered, m.cover[l - 1][size_t(sy) * pw + sx]);
+                }
+                next[size_t(y) * w + x] = glm::vec2(sum * 0.25);
+                next_cover[size_t(y) * w + x] = covered;
+            }
+        m.levels.push_back(std::move(next));
+        m.cover.push_back(std::move(next_cover));
+    }
+    return m;
+}
+
+/// Value-initialised = galoppo2010's settings.
+struct ChebyshevStencilOptions {
+    float threshold = 0.01f;      ///< flag unless a bound says lit or shadowed with probability >= 1 - threshold
+    /// The lit test compares at t_min - bias_scale * (the receiver's estimated depth spread over the
+    /// texels read): the receiver is in the map too. Chebyshev needs the margin >~ 10 sigma for 1%.
+    float bias_scale = 4.0f;
+    float min_variance = 1e-12f;  ///< galoppo2010's gMinVariance, in depth units squared
+    /// false (galoppo2010): "fully shadowed" from Chebyshev's bound. The map's conservative
+    /// minimum makes a partly covered texel look fully covered, so that claim is wrong wherever a
+    /// shadow edge crosses a texel (most misses when texels are larger than pixel footprints).
+    /// true: "fully shadowed" only from the inner-coverage channel — every texel read is inside
+    /// one caster triangle lying in front of every point (a proof, up to the exact test's
+    /// coplanar tolerance); the lit claim stays Chebyshev's.
+    bool inner_shadow_proof = false;
+};
+
+/// galoppo2010's stencil (Listing 1.6.1) over explicit footprints: the level where the points'
+/// light-space box spans at most one texel, the mean moments of the <= 2x2 texels it touches,
+/// Chebyshev's one-tailed bounds. Pixels with no surface stay 0; points outside the map are flagged.
+inline std::vector<uint8_t> chebyshevEdgeStencilCpu(const MomentMapCpu& m, const SampleListsLight& light,
+                                                    const AaFootprints& f, const ChebyshevStencilOptions& o = {},
+                                                    bool cull_back_facing = true) {
+    PENUMBRA_CHECK(o.threshold > 0.0f && o.threshold < 1.0f && o.bias_scale >= 0.0f && o.min_variance > 0.0f,
+                   "penumbra::chebyshevEdgeStencilCpu: threshold ", o.threshold, " must be in (0, 1), bias_scale ",
+                   o.bias_scale, " >= 0, min_variance ", o.min_variance, " > 0");
+    std::vector<uint8_t> flags(f.pixels, 0);
+    const glm::dmat4 vp(light.view_projection);
+    const uint32_t levels = uint32_t(m.levels.size());
+    for (uint32_t i = 0; i < f.pixels; ++i) {
+        if (f.centres[i].w == 0.0f) continue;
+        const glm::vec4* subs = f.subSamples(i);
+        if (cull_back_facing) {
+            // Facing is geometry, not shadow: the same rule as the provable stencil.
+            uint32_t back = detail::aaBackFacing(light.light, f.centres[i], glm::vec3(f.normals[i]));
+            for (uint32_t k = 0; k < f.samples; ++k) back += detail::aaBackFacing(light.light, subs[k], glm::vec3(f.normals[i]));
+            if (back == f.samples + 1) continue;
+            if (back != 0) {
+                flags[i] = 1;
+                continue;
+            }
+        }
+        glm::dvec2 lo(1e300), hi(-1e300);
+        double t_min = 1e300, t_max = -1e300;
+        bool inside = true;
+        for (uint32_t k = 0; k <= f.samples && inside; ++k) {
+            const glm::vec4 p = k == 0 ? f.centres[i] : subs[k - 1];
+            const glm::dvec4 c = vp * glm::dvec4(glm::dvec3(p), 1.0);
+            if (!(c.w > 0.0)) {
+                inside = false;
+                break;
+            }
+            const glm::dvec2 g((c.x / c.w * 0.5 + 0.5) * m.width, (c.y / c.w * 0.5 + 0.5) * m.height);
+            if (!(g.x >= 0.0 && g.x <= m.width && g.y >= 0.0 && g.y <= m.height)) inside = false;
+            lo = glm::min(lo, g);
+            hi = glm::max(hi, g);
+            const double d = detail::aaLightDepth(c, m.perspective);
+            t_min = std::min(t_min, d);
+            t_max = std::max(t_max, d);
+        }
+        if (!inside) {
+            flags[i] = 1;
+            continue;
+        }
+        const double extent = std::max(hi.x - lo.x, hi.y - lo.y);
+        uint32_t level = extent <= 1.0 ? 0u : uint32_t(std::ceil(std::log2(extent)));
+        level = std::min(level, levels - 1);
+        const double scale = std::ldexp(1.0, -int(level));
+        const uint32_t lw = m.levelWidth(level), lh = m.levelHeight(level);
+        const int x0 = std::clamp(int(std::floor(lo.x * scale)), 0, int(lw) - 1), x1 = std::clamp(int(std::floor(hi.x * scale)), 0, int(lw) - 1);
+        const int y0 = std::clamp(int(std::floor(lo.y * scale)), 0, int(lh) - 1), y1 = std::clamp(int(std::floor(hi.y * scale)), 0, int(lh) - 1);
+        glm::dvec2 mom(0.0);
+        int n = 0;
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x, ++n) mom += glm::dvec2(m.levels[level][size_t(y) * lw + x]);
+        mom /= double(n);
+        const double mu = mom.x;
+        const double var = std::max(double(o.min_variance), mom.y - mu * mu);
+        bool decided = false;
+        if (o.inner_shadow_proof) {
+            // Fully shadowed, proven: each texel read lies inside a triangle in front of t_min.
+            float covered = -std::numeric_limits<float>::infinity();
+            for (int y = y0; y <= y1; ++y)
+                for (int x = x0; x <= x1; ++x) covered = std::max(covered, m.cover[level][size_t(y) * lw + x]);
+            decided = double(covered) < t_min - 1e-6 * std::abs(t_min);
+        } else if (t_min > mu) {
+            // Fully shadowed: even the nearest point has P(x >= t_min) < threshold.
+            decided = var / (var + (t_min - mu) * (t_min - mu)) < o.threshold;
+        }
+        // Fully lit: P(x < t_min - bias) < threshold. The receiver lies in the map itself: over the
+        // <= 2x2 texels read (2^(level+1) level-0 texels wide) its depth spreads by about the
+        // footprint's depth extent times (region width / footprint width); bias_scale of that.
+        const double spread = (t_max - t_min) * std::ldexp(2.0, int(level)) / std::max(extent, 0x1.0p-20);
+        const double t_lit = t_min - double(o.bias_scale) * spread;
+        if (!decided && t_lit < mu) decided = var / (var + (mu - t_lit) * (mu - t_lit)) < o.threshold;
+        flags[i] = decided ? 0 : 1;
+    }
+    return flags;
+}
+
+}  // namespace penumbra
+
+#endif
