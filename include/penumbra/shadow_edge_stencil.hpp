@@ -40,6 +40,9 @@
 #ifndef PENUMBRA_SHADOW_EDGE_STENCIL_HPP
 #define PENUMBRA_SHADOW_EDGE_STENCIL_HPP
 
+#include "penumbra/detail/shared.hpp"
+#include <penumbra/shadow_edge_stencil/shadow_edge_stencil_shared.h>
+
 #include "penumbra/error.hpp"
 #include "penumbra/pipelines/alias_free_hard.hpp"
 
@@ -47,6 +50,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <utility>
@@ -54,10 +58,20 @@
 
 namespace penumbra {
 
+using AaParams = shared::PenumbraAaParams;
+using AaFootprintRecord = shared::PenumbraAaFootprint;
+static_assert(sizeof(AaParams) == 928 && offsetof(AaParams, numbers) == 256 && offsetof(AaParams, light_clip) == 288 &&
+                  offsetof(AaParams, offsets) == 368 && offsetof(AaParams, view) == 880,
+              "PenumbraAaParams: the std140 offsets the shaders assume");
+static_assert(sizeof(AaFootprintRecord) == 64, "PenumbraAaFootprint: 64 bytes (std430)");
+
 enum class AaPattern { RotatedGrid, Jittered };
 enum class AaMode { Off, Edge, Full };
 
-inline constexpr uint32_t kAaMaxSamples = 64;
+inline constexpr uint32_t kAaMaxSamples = PENUMBRA_AA_MAX_SAMPLES;
+/// Loop iterations one light-pass fragment may spend (llvmpipe stops an invocation's loops after
+/// 65 535): a texel's list is walked only when list length x (N + 2) stays below it.
+inline constexpr uint32_t kAaLoopBudget = 65000;
 inline constexpr double kAaMaxStretch = 8.0;  ///< sub-sample distance limit, in fronto-parallel pixel widths
 
 /// Value-initialised = rotated grid 4x.
@@ -120,9 +134,71 @@ struct AaFootprints {
 };
 
 namespace detail {
+// Double arithmetic in a fixed order with opaque products (no FMA contraction), mirrored step for
+// step by shadow_edge_stencil.glsl (`precise`): the GPU's footprints and decisions match these bits
+// wherever fp64 +, -, *, / and sqrt are correctly rounded (llvmpipe; most GPUs for + - *).
+inline double aaDot(const glm::dvec3& a, const glm::dvec3& b) {
+    return (mulRounded(a.x, b.x) + mulRounded(a.y, b.y)) + mulRounded(a.z, b.z);
+}
+inline double aaLength(const glm::dvec3& v) { return std::sqrt(aaDot(v, v)); }
+inline glm::dvec3 aaCross(const glm::dvec3& a, const glm::dvec3& b) {
+    return {mulRounded(a.y, b.z) - mulRounded(a.z, b.y), mulRounded(a.z, b.x) - mulRounded(a.x, b.z),
+            mulRounded(a.x, b.y) - mulRounded(a.y, b.x)};
+}
+inline glm::dvec3 aaAxpy(const glm::dvec3& o, double t, const glm::dvec3& d) {  // o + t d
+    return {o.x + mulRounded(t, d.x), o.y + mulRounded(t, d.y), o.z + mulRounded(t, d.z)};
+}
+/// m * v as GLM groups it: (m0 x + m1 y) + (m2 z + m3 w).
+inline glm::dvec4 aaTransform(const glm::dmat4& m, const glm::dvec4& v) {
+    glm::dvec4 r;
+    for (int c = 0; c < 4; ++c)
+        r[c] = (mulRounded(m[0][c], v.x) + mulRounded(m[1][c], v.y)) + (mulRounded(m[2][c], v.z) + mulRounded(m[3][c], v.w));
+    return r;
+}
 inline glm::dvec3 aaUnproject(const glm::dmat4& inverse, double x, double y, double z) {
-    const glm::dvec4 h = inverse * glm::dvec4(x, y, z, 1.0);
-    return glm::dvec3(h) / h.w;
+    const glm::dvec4 h = aaTransform(inverse, glm::dvec4(x, y, z, 1.0));
+    return {h.x / h.w, h.y / h.w, h.z / h.w};
+}
+/// Pixel coordinate -> NDC: (p / size) * 2 - 1.
+inline double aaNdc(double p, uint32_t size) { return mulRounded(p / double(size), 2.0) - 1.0; }
+/// Light clip -> grid coordinate: ((x / w) * 0.5 + 0.5) * size.
+inline double aaGrid(double x, double w, uint32_t size) { return mulRounded(mulRounded(x / w, 0.5) + 0.5, double(size)); }
+
+/// The sub-sample of the pixel (x, y) with centre c and plane normal n at offset `off`.
+inline glm::vec4 aaSubSample(const glm::dmat4& inverse, double z_near, uint32_t width, uint32_t height, uint32_t x,
+                             uint32_t y, const glm::dvec3& c, const glm::dvec3& n, const glm::vec2& off, double s0,
+                             bool& stretched, bool& fallback) {
+    const double px = (double(x) + 0.5) + double(off.x), py = (double(y) + 0.5) + double(off.y);
+    const double nx = aaNdc(px, width), ny = aaNdc(py, height);
+    const glm::dvec3 o = aaUnproject(inverse, nx, ny, z_near);
+    const glm::dvec3 d = aaUnproject(inverse, nx, ny, 1.0) - o;
+    const double dn = aaDot(n, d);
+    const double t = aaDot(n, c - o) / dn;
+    stretched = fallback = false;
+    glm::dvec3 q = c;
+    if (dn != 0.0 && std::isfinite(t) && t > 0.0) {
+        q = aaAxpy(o, t, d);
+        // Grazing planes: at most kAaMaxStretch fronto-parallel pixel widths away.
+        const double fronto = aaLength(aaAxpy(o, s0, d) - c);
+        const double reach = mulRounded(kAaMaxStretch, fronto);
+        const double dist = aaLength(q - c);
+        if (dist > reach && dist > 0.0) {
+            q = aaAxpy(c, reach / dist, q - c);
+            stretched = true;
+        }
+    } else {
+        fallback = true;
+    }
+    return glm::vec4(float(q.x), float(q.y), float(q.z), 1.0f);
+}
+
+/// The centre's parameter on its own pixel-centre ray (for the fronto-parallel pixel width).
+inline double aaCentreParameter(const glm::dmat4& inverse, double z_near, uint32_t width, uint32_t height, uint32_t x,
+                                uint32_t y, const glm::dvec3& c) {
+    const double nx = aaNdc(double(x) + 0.5, width), ny = aaNdc(double(y) + 0.5, height);
+    const glm::dvec3 o = aaUnproject(inverse, nx, ny, z_near);
+    const glm::dvec3 d = aaUnproject(inverse, nx, ny, 1.0) - o;
+    return aaDot(c - o, d) / aaDot(d, d);
 }
 }  // namespace detail
 
@@ -149,38 +225,16 @@ inline AaFootprints aaFootprintsCpu(const SampleListsView& view, const glm::vec4
     for (uint32_t y = 0; y < view.height; ++y) {
         for (uint32_t x = 0; x < view.width; ++x) {
             const uint32_t i = y * view.width + x;
-            const glm::vec4 c4 = centres[i];
-            if (c4.w == 0.0f) continue;
-            const glm::dvec3 c(c4), n(normals[i]);
-            const auto ray = [&](double px, double py, glm::dvec3& origin, glm::dvec3& dir) {
-                const double nx = px / view.width * 2.0 - 1.0, ny = py / view.height * 2.0 - 1.0;
-                origin = detail::aaUnproject(inverse, nx, ny, z_near);
-                dir = detail::aaUnproject(inverse, nx, ny, 1.0) - origin;
-            };
-            glm::dvec3 o0, d0;
-            ray(x + 0.5, y + 0.5, o0, d0);
-            const double s0 = glm::dot(c - o0, d0) / glm::dot(d0, d0);  // the centre's parameter on its own ray
+            if (centres[i].w == 0.0f) continue;
+            const glm::dvec3 c(glm::vec3(centres[i])), n(glm::vec3(normals[i]));
+            const double s0 = detail::aaCentreParameter(inverse, z_near, view.width, view.height, x, y, c);
             for (uint32_t k = 0; k < f.samples; ++k) {
-                const glm::vec2 off = aaSubSampleOffset(pattern, i, k);
-                glm::dvec3 o, d;
-                ray(x + 0.5 + off.x, y + 0.5 + off.y, o, d);
-                const double dn = glm::dot(n, d);
-                const double t = glm::dot(n, c - o) / dn;
-                glm::dvec3 q = c;
-                if (dn != 0.0 && std::isfinite(t) && t > 0.0) {
-                    q = o + t * d;
-                    // Grazing planes: at most kAaMaxStretch fronto-parallel pixel widths away.
-                    const double fronto = glm::length(o + s0 * d - c);
-                    const double reach = kAaMaxStretch * fronto;
-                    const double dist = glm::length(q - c);
-                    if (dist > reach && dist > 0.0) {
-                        q = c + (q - c) * (reach / dist);
-                        ++f.stretched;
-                    }
-                } else {
-                    ++f.fallbacks;
-                }
-                f.sub_samples[size_t(i) * f.samples + k] = glm::vec4(glm::vec3(q), 1.0f);
+                bool stretched = false, fallback = false;
+                f.sub_samples[size_t(i) * f.samples + k] =
+                    detail::aaSubSample(inverse, z_near, view.width, view.height, x, y, c, n,
+                                        aaSubSampleOffset(pattern, i, k), s0, stretched, fallback);
+                f.stretched += stretched;
+                f.fallbacks += fallback;
             }
         }
     }
@@ -244,6 +298,16 @@ inline std::vector<float> aaResolve(AaMode mode, const std::vector<uint32_t>& st
 // ---------------------------------------------------------------------------------------------
 // The provable stencil
 
+/// Value-initialised = defaults.
+struct ProvableStencilOptions {
+    bool cull_back_facing = true;         ///< the sample lists' rule (AliasFreeHard's lists cull them)
+    uint32_t max_footprint_texels = 1024; ///< a footprint whose light-texel box is larger is flagged (grazing views)
+    /// A light texel holding more footprints than this flags them all instead of classifying them
+    /// (0 = kAaLoopBudget / (N + 2), what one fragment can walk on llvmpipe).
+    uint32_t max_list = 0;
+    uint32_t maxList(uint32_t samples) const { return max_list ? max_list : kAaLoopBudget / (samples + 2); }
+};
+
 /// What the provable stencil found (per pixel flags plus work counters).
 struct ProvableStencilCpu {
     std::vector<uint8_t> flags;     ///< 1 = multi-sample (some triangle splits the footprint, none covers it)
@@ -253,6 +317,13 @@ struct ProvableStencilCpu {
     uint64_t exact_tests = 0;       ///< exact point tests of the undecided pairs
     uint64_t outside = 0;           ///< footprints with a point outside the light frustum (flagged)
     uint64_t mixed_facing = 0;      ///< footprints whose points disagree on facing the light (flagged)
+    uint64_t over_limits = 0;       ///< footprints flagged for a box over max_footprint_texels or an over-long list
+    /// The GPU's stencil word per pixel (PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED).
+    std::vector<uint32_t> words() const {
+        std::vector<uint32_t> w(flags.size());
+        for (size_t i = 0; i < w.size(); ++i) w[i] = (flags[i] ? PENUMBRA_AA_FLAG : 0u) | (shadowed[i] ? PENUMBRA_AA_SHADOWED : 0u);
+        return w;
+    }
 };
 
 namespace detail {
@@ -281,9 +352,9 @@ inline AaShadowVolume aaShadowVolume(const glm::dvec3& a, const glm::dvec3& b, c
                                      double reach) {
     AaShadowVolume v;
     const bool point = light.w != 0.0f;
-    const glm::dvec3 l(light);
-    const glm::dvec3 nt = glm::cross(b - a, c - a);
-    const double nt_len = glm::length(nt);
+    const glm::dvec3 l{glm::vec3(light)};
+    const glm::dvec3 nt = aaCross(b - a, c - a);
+    const double nt_len = aaLength(nt);
     if (!(nt_len > 0.0)) return v;
     const glm::dvec3 u = nt / nt_len;
     const glm::dvec3 corners[3] = {a, b, c};
@@ -291,42 +362,68 @@ inline AaShadowVolume aaShadowVolume(const glm::dvec3& a, const glm::dvec3& b, c
         const glm::dvec3& p0 = corners[e];
         const glm::dvec3& p1 = corners[(e + 1) % 3];
         const glm::dvec3& opposite = corners[(e + 2) % 3];
-        const glm::dvec3 m = point ? glm::cross(p0 - l, p1 - l) : glm::cross(p1 - p0, l);
-        const double len = glm::length(m);
+        const glm::dvec3 m = point ? aaCross(p0 - l, p1 - l) : aaCross(p1 - p0, l);
+        const double len = aaLength(m);
         if (!(len > 0.0)) return v;
         glm::dvec3 mu = m / len;
-        const double side = glm::dot(mu, opposite - p0);
+        const double side = aaDot(mu, opposite - p0);
         if (side == 0.0) return v;  // edge-on from the light
         if (side < 0.0) mu = -mu;
-        v.planes[e] = glm::dvec4(mu, -glm::dot(mu, p0));
+        v.planes[e] = glm::dvec4(mu, -aaDot(mu, p0));
     }
     if (point) {
-        const double dl = glm::dot(u, l - a);
+        const double dl = aaDot(u, l - a);
         if (dl == 0.0) {
             v.blocks_nothing = true;
             return v;
         }
         const glm::dvec3 beyond = dl > 0.0 ? -u : u;
-        v.planes[3] = glm::dvec4(beyond, -glm::dot(beyond, a));
+        v.planes[3] = glm::dvec4(beyond, -aaDot(beyond, a));
         v.count = 4;
     } else {
-        const double dd = glm::dot(u, l);
+        const double dd = aaDot(u, l);
         if (dd == 0.0) {
             v.blocks_nothing = true;
             return v;
         }
         const glm::dvec3 beyond = dd > 0.0 ? -u : u;  // behind the triangle seen along the light
-        v.planes[3] = glm::dvec4(beyond, -glm::dot(beyond, a));
+        v.planes[3] = glm::dvec4(beyond, -aaDot(beyond, a));
         // Within reach: distance beyond the plane < reach * |u . d|.
-        v.planes[4] = glm::dvec4(-beyond, glm::dot(beyond, a) + reach * std::abs(dd));
+        v.planes[4] = glm::dvec4(-beyond, aaDot(beyond, a) + mulRounded(reach, std::abs(dd)));
         v.count = 5;
     }
     v.valid = true;
     return v;
 }
 
-inline double aaPlaneDistance(const glm::dvec4& plane, const glm::dvec3& p) {
-    return glm::dot(glm::dvec3(plane), p) + plane.w;
+inline double aaPlaneDistance(const glm::dvec4& plane, const glm::dvec3& p) { return aaDot(glm::dvec3(plane), p) + plane.w; }
+
+/// The sphere test's margin: the exact test's coplanar tolerance (eps times its scale, which
+/// these distances bound) doubled, plus 1e-9 of the scale for rounding.
+inline double aaSphereMargin(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& q, double r,
+                             const glm::vec4& light, double reach, double eps) {
+    const double tri = std::max(aaLength(b - a), std::max(aaLength(c - a), aaLength(c - b)));
+    const double to_light = light.w != 0.0f ? aaLength(glm::dvec3(glm::vec3(light)) - q)
+                                            : mulRounded(reach, aaLength(glm::dvec3(glm::vec3(light))));
+    const double scale = ((aaLength(a - q) + tri) + r) + to_light;
+    return r + mulRounded(mulRounded(2.0, eps) + 1e-9, scale);
+}
+
+/// One (footprint, triangle) pair by the sphere (centre q, radius r) alone: -1 outside (blocks
+/// none), 1 inside (blocks all), 0 undecided (run the exact test on every point).
+inline int aaSphereClass(const AaShadowVolume& volume, const glm::dvec3& q, double margin, const glm::vec4& light) {
+    if (!volume.valid) return 0;
+    bool all_inside = true;
+    for (int k = 0; k < volume.count; ++k) {
+        const double d = aaPlaneDistance(volume.planes[k], q);
+        if (d < -margin) return -1;
+        if (!(d > margin)) all_inside = false;
+    }
+    // A point light within the margin of the triangle's plane: the exact test's endpoint rule may
+    // apply; leave it to the exact test.
+    if (all_inside && light.w != 0.0f && std::abs(aaPlaneDistance(volume.planes[3], glm::dvec3(glm::vec3(light)))) <= margin)
+        return 0;
+    return all_inside ? 1 : 0;
 }
 }  // namespace detail
 
@@ -338,7 +435,7 @@ inline double aaPlaneDistance(const glm::dvec4& plane, const glm::dvec3& p) {
 /// (exact geometry only).
 inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& options, const SampleListsLight& light,
                                                  const AaFootprints& f, const AfhCasters& casters,
-                                                 bool cull_back_facing = true) {
+                                                 const ProvableStencilOptions& so = {}) {
     validateAliasFreeHardOptions(options, light.light);
     PENUMBRA_CHECK(options.precision == AfhPrecision::Exact && options.sample_offset == 0.0f,
                    "penumbra::provableEdgeStencilCpu: needs the exact hard pipeline (precision Exact, sample_offset 0)");
@@ -356,6 +453,7 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
     const double reach = options.directional_reach;
     const double eps = options.coplanar_epsilon;
 
+    const glm::dmat4 vp(light.view_projection);
     // Bin each footprint into every light texel its points' box touches.
     std::vector<std::vector<uint32_t>> bins(size_t(gw) * gh);
     std::vector<glm::dvec3> centre(f.pixels);
@@ -367,7 +465,7 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
         const glm::vec3 n(f.normals[i]);
         const glm::vec4* subs = f.subSamples(i);
         // Facing: the lists reject light-back-facing samples (state BACK_FACING, not lit).
-        if (cull_back_facing) {
+        if (so.cull_back_facing) {
             uint32_t back = detail::aaBackFacing(light.light, f.centres[i], n);
             for (uint32_t k = 0; k < f.samples; ++k) back += detail::aaBackFacing(light.light, subs[k], n);
             if (back == k_points) {
@@ -382,16 +480,16 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
         }
         glm::dvec2 lo(1e300), hi(-1e300);
         bool inside = true;
-        centre[i] = glm::dvec3(f.centres[i]);
+        centre[i] = glm::dvec3(glm::vec3(f.centres[i]));
         for (uint32_t k = 0; k < k_points; ++k) {
-            const glm::vec4 p = k == 0 ? f.centres[i] : subs[k - 1];
-            radius[i] = std::max(radius[i], glm::length(glm::dvec3(p) - centre[i]));
-            const glm::dvec4 clip = glm::dmat4(light.view_projection) * glm::dvec4(glm::dvec3(p), 1.0);
+            const glm::dvec3 p(glm::vec3(k == 0 ? f.centres[i] : subs[k - 1]));
+            radius[i] = std::max(radius[i], detail::aaLength(p - centre[i]));
+            const glm::dvec4 clip = detail::aaTransform(vp, glm::dvec4(p, 1.0));
             if (!(clip.w > 0.0)) {
                 inside = false;
                 break;
             }
-            const glm::dvec2 g((clip.x / clip.w * 0.5 + 0.5) * gw, (clip.y / clip.w * 0.5 + 0.5) * gh);
+            const glm::dvec2 g(detail::aaGrid(clip.x, clip.w, gw), detail::aaGrid(clip.y, clip.w, gh));
             if (!(g.x >= 0.0 && g.x <= gw && g.y >= 0.0 && g.y <= gh)) {
                 inside = false;
                 break;
@@ -404,14 +502,29 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
             ++out.outside;
             continue;
         }
-        active[i] = 1;
         // One texel of slack on every side: float rounding of the projection.
         const int x0 = std::max(0, int(std::floor(lo.x)) - 1), y0 = std::max(0, int(std::floor(lo.y)) - 1);
         const int x1 = std::min(int(gw) - 1, int(std::floor(hi.x)) + 1), y1 = std::min(int(gh) - 1, int(std::floor(hi.y)) + 1);
+        if (uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1) > so.max_footprint_texels) {
+            out.flags[i] = 1;
+            ++out.over_limits;
+            continue;
+        }
+        active[i] = 1;
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x) bins[size_t(y) * gw + x].push_back(i);
     }
 
+    // Over-long lists: their footprints are flagged, not classified (the GPU fragment's loop budget).
+    const uint32_t max_list = so.maxList(f.samples);
+    for (const std::vector<uint32_t>& bin : bins) {
+        if (bin.size() <= max_list) continue;
+        for (const uint32_t i : bin) {
+            if (!out.flags[i]) ++out.over_limits;
+            out.flags[i] = 1;
+            active[i] = 0;
+        }
+    }
     const ConservativeRasterSetup cr = afhConservativeSetup(options);
     const auto& P = *casters.positions;
     const auto& I = *casters.indices;
@@ -436,40 +549,18 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
         if (x0 > x1 || y0 > y1) continue;
         const detail::AaShadowVolume volume = detail::aaShadowVolume(a, b, c, light.light, reach);
         if (volume.blocks_nothing) continue;
-        const double tri_scale = std::max(glm::length(b - a), std::max(glm::length(c - a), glm::length(c - b)));
         for (int y = y0; y <= y1; ++y) {
             for (int x = x0; x <= x1; ++x) {
                 for (const uint32_t i : bins[size_t(y) * gw + x]) {
-                    if (stamp[i] == uint32_t(t) || covered[i]) continue;
+                    if (stamp[i] == uint32_t(t) || covered[i] || !active[i]) continue;
                     stamp[i] = uint32_t(t);
                     ++out.pairs;
-                    const double r = radius[i];
-                    if (volume.valid) {
-                        // Margins: the exact test's coplanar tolerance (eps * its scale) and rounding.
-                        const glm::dvec3& q = centre[i];
-                        const double scale = glm::length(a - q) + tri_scale + r +
-                                             (point ? glm::length(glm::dvec3(light.light) - q) : reach);
-                        const double margin = r + (2.0 * eps + 1e-9) * scale;
-                        bool all_inside = true, outside = false;
-                        for (int k = 0; k < volume.count; ++k) {
-                            const double d = detail::aaPlaneDistance(volume.planes[k], q);
-                            if (d < -margin) outside = true;
-                            if (!(d > margin)) all_inside = false;
-                        }
-                        // A point light within the margin of the triangle's plane: the exact test's
-                        // endpoint rule may apply; leave it to the exact test.
-                        if (all_inside && point &&
-                            std::abs(detail::aaPlaneDistance(volume.planes[3], glm::dvec3(light.light))) <= margin)
-                            all_inside = false;
-                        if (outside) {
-                            ++out.sphere_decided;
-                            continue;
-                        }
-                        if (all_inside) {
-                            ++out.sphere_decided;
-                            covered[i] = 1;
-                            continue;
-                        }
+                    const double margin = detail::aaSphereMargin(a, b, c, centre[i], radius[i], light.light, reach, eps);
+                    const int sphere = detail::aaSphereClass(volume, centre[i], margin, light.light);
+                    if (sphere != 0) {
+                        ++out.sphere_decided;
+                        if (sphere > 0) covered[i] = 1;
+                        continue;
                     }
                     uint32_t count = 0;
                     const glm::vec4* subs = f.subSamples(i);
@@ -492,6 +583,42 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
         else if (split[i]) out.flags[i] = 1;
     }
     return out;
+}
+
+/// The GPU kernels' parameter block (pure setup): the view, the light (its view_projection must see
+/// every centre and sub-sample), the hard pipeline's exact-test settings, the rotated-grid pattern
+/// (the GPU runs the rotated grid only: a jittered pattern differs per pixel), the light grid
+/// (options.grid_width x grid_height), the list capacity and the limits, and the mode of the
+/// sample-buffer and resolve kernels.
+inline AaParams aaParams(const SampleListsView& view, const SampleListsLight& light, const AliasFreeHardOptions& options,
+                         const AaPatternOptions& pattern, const ProvableStencilOptions& so, uint32_t list_capacity,
+                         uint32_t mode) {
+    checkAaPatternOptions(pattern);
+    PENUMBRA_CHECK(pattern.pattern == AaPattern::RotatedGrid,
+                   "penumbra::aaParams: the GPU stencil runs the rotated-grid pattern only (jittered: the CPU path)");
+    AaParams p{};
+    const glm::dmat4 inverse(view.inverse_view_projection), vp(light.view_projection);
+    for (int c = 0; c < 4; ++c) {
+        p.inverse_view_projection[c] = inverse[c];
+        p.light_view_projection[c] = vp[c];
+    }
+    p.numbers = glm::dvec4(options.coplanar_epsilon, double(options.directional_reach), view.depth_zero_to_one ? 0.0 : -1.0, 0.0);
+    p.light_clip = light.view_projection;
+    p.light = light.light;
+    for (uint32_t k = 0; k < pattern.samples; ++k) {
+        const glm::vec2 o = aaSubSampleOffset(pattern, 0, k);
+        if (k % 2 == 0) {
+            p.offsets[k / 2].x = o.x;
+            p.offsets[k / 2].y = o.y;
+        } else {
+            p.offsets[k / 2].z = o.x;
+            p.offsets[k / 2].w = o.y;
+        }
+    }
+    p.view = glm::uvec4(view.width, view.height, pattern.samples, so.cull_back_facing ? 1u : 0u);
+    p.grid = glm::uvec4(options.grid_width, options.grid_height, list_capacity, mode);
+    p.limits = glm::uvec4(so.max_footprint_texels, so.maxList(pattern.samples), 0u, 0u);
+    return p;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,0 +1,286 @@
+// penumbra — eye-view anti-aliasing of irregular hard shadows (galoppo2010) on the GPU: the provable
+// shadow-edge stencil, the extended sample buffer and the resolve. The rules, the pure setup and the
+// CPU twins are penumbra/shadow_edge_stencil.hpp; this header runs them.
+//
+// Integration summary
+//   needs:    GL 4.5 with fp64 in shaders and geometry shaders; PENUMBRA_GL_HEADER; a scan block
+//             (the stencil owns one Scanner); the engine's per-pixel view samples (vec4 world
+//             positions, w == 0: none) and face normals (vec4) as buffer ranges, P = W_view x
+//             H_view each; casters as a vec3 float vertex range + uint32 index range (GL_TRIANGLES).
+//   produces: subSamples() (vec4 [P * N]: pixel i's sub-sample k at i N + k), stencil() (uint [P]:
+//             PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED), then on request the hard pipeline's input
+//             (writeSampleBuffer: positions + normals [P (1 + N)], the layout of aaSampleBuffer) and
+//             per-pixel visibility from the hard pipeline's states (resolve).
+//   per frame: run() — (1) sub-samples + facing, (2) footprint boxes and counts per light texel,
+//             (3) exclusive scan, (4) scatter, (5) the footprint light pass: every caster drawn with
+//             the conservative emitter into an attachment-less grid; each fragment classifies its
+//             texel's footprints against the triangle (sphere test, exact test where undecided),
+//             (6) final bits. Then the engine runs AliasFreeHardShadows on writeSampleBuffer's
+//             output and calls resolve() with its states. Nothing is read back, queried, allocated
+//             or thrown per frame: misuse returns a Status.
+//   equals:   the CPU twin (aaFootprintsCpu, provableEdgeStencilCpu with the same options; casters
+//             not culled) bit for bit where fp64 + - * / sqrt are correctly rounded (llvmpipe) and
+//             no list entry overflowed (readStatus()[PENUMBRA_AA_STATUS_LIST_OVERFLOW] == 0; an
+//             overflowing pixel is flagged: safe, merely multi-sampled).
+//   state:    run() binds its programs, vertex array, framebuffer, viewport (grid size), uniform
+//             bindings 0-1 and storage bindings 0-7 and what the scanner binds; disables depth test,
+//             culling and rasterizer discard; restores none of them. Ends with
+//             GL_SHADER_STORAGE_BARRIER_BIT.
+#ifndef PENUMBRA_GL_SHADOW_EDGE_STENCIL_HPP
+#define PENUMBRA_GL_SHADOW_EDGE_STENCIL_HPP
+
+#include "penumbra/buffer_range.hpp"
+#include "penumbra/conservative_raster.hpp"
+#include "penumbra/detail/dispatch.hpp"
+#include "penumbra/gl/gl.hpp"
+#include "penumbra/gl/objects.hpp"
+#include "penumbra/gl/scan.hpp"
+#include "penumbra/gl/shader.hpp"
+#include "penumbra/shadow_edge_stencil.hpp"
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+namespace penumbra::gl {
+
+/// The casters of one run (every triangle casts: no class culling).
+struct AaCasterBuffers {
+    BufferRange positions;  ///< vec3 float position per vertex, `stride` bytes apart
+    BufferRange indices;    ///< uint32, 3 per triangle
+    uint32_t index_count = 0;
+    uint32_t stride = 12;   ///< bytes from one vertex's position to the next (interleaved attributes)
+};
+
+class ShadowEdgeStencil {
+public:
+    /// options: the hard pipeline's options (grid_width x grid_height = the binning grid, the
+    /// coplanar epsilon, directional_reach); pattern: rotated grid, N in [1, 64]; list_capacity:
+    /// footprint-texel entries the lists hold (over it: pixels flagged, counted in the status).
+    /// Throws penumbra::Error for bad sizes or options (setup time).
+    ShadowEdgeStencil(uint32_t view_width, uint32_t view_height, const AliasFreeHardOptions& options,
+                      const AaPatternOptions& pattern = {}, const ProvableStencilOptions& stencil_options = {},
+                      uint32_t list_capacity = 1u << 22, const ShaderLibrary& library = ShaderLibrary::embedded())
+        : width_(view_width), height_(view_height), options_(options), pattern_(pattern), stencil_options_(stencil_options),
+          capacity_(list_capacity), scanner_(ScanOptions{}, library) {
+        checkAaPatternOptions(pattern);
+        PENUMBRA_CHECK(pattern.pattern == AaPattern::RotatedGrid,
+                       "ShadowEdgeStencil: the GPU stencil runs the rotated-grid pattern only (jittered: the CPU path)");
+        PENUMBRA_CHECK(view_width > 0 && view_height > 0 && uint64_t(view_width) * view_height * (1 + pattern.samples) < (1ull << 31),
+                       "ShadowEdgeStencil: view ", view_width, "x", view_height, " with ", pattern.samples,
+                       " sub-samples is empty or past 2^31 samples");
+        PENUMBRA_CHECK(options.precision == AfhPrecision::Exact && options.sample_offset == 0.0f && !options.back_faces_only &&
+                           !options.light_facing_only,
+                       "ShadowEdgeStencil: needs the exact hard pipeline without caster culling");
+        validateAliasFreeHardOptions(options, glm::vec4(0, 0, 0, 1));
+        PENUMBRA_CHECK(list_capacity >= 1, "ShadowEdgeStencil: list capacity must be >= 1");
+        pixels_ = view_width * view_height;
+        const uint64_t texels = uint64_t(options.grid_width) * options.grid_height;
+        ConservativeRasterOptions cr;
+        cr.viewport_width = static_cast<int>(options.grid_width);
+        cr.viewport_height = static_cast<int>(options.grid_height);
+        cr.variant = ConservativeVariant::Exact;
+        cr.near_plane = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);  // w >= min_w only, as the hard pipeline's light pass
+        conservative_ = conservativeRasterSetup(cr);
+
+        sub_samples_ = Buffer(16ull * pixels_ * pattern.samples);
+        stencil_ = Buffer(4ull * pixels_);
+        footprints_ = Buffer(sizeof(AaFootprintRecord) * pixels_);
+        counts_ = Buffer(4 * (texels + 1));
+        cursor_ = Buffer(4 * texels);
+        list_ = Buffer(4ull * list_capacity);
+        status_ = Buffer(4 * PENUMBRA_AA_STATUS_WORDS);
+        params_ = Buffer(sizeof(AaParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        conservative_ubo_ = Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
+        scanner_.reserve(texels + 1);
+
+        footprints_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/footprints.comp.glsl", {}, library);
+        setup_program_[0] = buildComputeProgram("penumbra/shadow_edge_stencil/setup.comp.glsl", {{"PENUMBRA_AA_PASS", "0"}}, library);
+        setup_program_[1] = buildComputeProgram("penumbra/shadow_edge_stencil/setup.comp.glsl", {{"PENUMBRA_AA_PASS", "1"}}, library);
+        classify_program_ = buildProgram({"penumbra/shadow_edge_stencil/classify.vert.glsl",
+                                          "penumbra/shadow_edge_stencil/classify.geom.glsl",
+                                          "penumbra/shadow_edge_stencil/classify.frag.glsl"},
+                                         conservative_.defines, library);
+        finish_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/finish.comp.glsl", {}, library);
+        buffer_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/sample_buffer.comp.glsl", {}, library);
+        resolve_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/resolve.comp.glsl", {}, library);
+
+        glCreateVertexArrays(1, &vao_);
+        glEnableVertexArrayAttrib(vao_, 0);
+        glVertexArrayAttribFormat(vao_, 0, 3, GL_FLOAT, GL_FALSE, 0);
+        glVertexArrayAttribBinding(vao_, 0, 0);
+        glCreateFramebuffers(1, &fbo_);
+        glNamedFramebufferParameteri(fbo_, GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options.grid_width));
+        glNamedFramebufferParameteri(fbo_, GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options.grid_height));
+    }
+    ShadowEdgeStencil(const ShadowEdgeStencil&) = delete;
+    ShadowEdgeStencil& operator=(const ShadowEdgeStencil&) = delete;
+    ~ShadowEdgeStencil() {
+        if (vao_) glDeleteVertexArrays(1, &vao_);
+        if (fbo_) glDeleteFramebuffers(1, &fbo_);
+    }
+
+    uint32_t pixels() const { return pixels_; }
+    uint32_t samples() const { return pattern_.samples; }
+    /// Bytes of each of writeSampleBuffer's ranges: P (1 + N) vec4.
+    uint64_t sampleBufferBytes() const { return 16ull * pixels_ * (1 + pattern_.samples); }
+
+    /// The stencil of one frame (see the header comment). centres/normals: P vec4 each; `view` the
+    /// engine's camera (its size must be the constructor's); `light.view_projection` must see every
+    /// centre and sub-sample (pixels with a point outside are flagged).
+    Status run(const BufferRange& centres, const BufferRange& normals, const SampleListsView& view,
+               const SampleListsLight& light, const AaCasterBuffers& casters) {
+        if (view.width != width_ || view.height != height_) return Status::InvalidArgument;
+        if (centres.size < 16ull * pixels_ || normals.size < 16ull * pixels_ || !centres.buffer || !normals.buffer)
+            return Status::RangeTooSmall;
+        if (casters.index_count % 3 != 0 || casters.indices.size < 4ull * casters.index_count ||
+            (casters.index_count > 0 && (!casters.positions.buffer || !casters.indices.buffer)))
+            return Status::RangeTooSmall;
+        if (centres.offset % 16 || normals.offset % 16 || casters.indices.offset % 4 || casters.stride < 12 || casters.stride % 4)
+            return Status::Misaligned;
+        if (!(light.light.w == 0.0f || light.light.w == 1.0f)) return Status::InvalidArgument;
+        centres_ = centres;
+        normals_ = normals;
+        params_staging_ = aaParams(view, light, options_, pattern_, stencil_options_, capacity_, PENUMBRA_AA_MODE_EDGE);
+        glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
+        const uint32_t zero = 0;
+        glClearNamedBufferData(counts_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferData(cursor_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferData(status_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+
+        // (1) sub-samples and facing.
+        bindCommon();
+        bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
+        dispatch(footprints_program_, pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // (2) boxes and counts, (3) scan, (4) scatter.
+        bindStencilPass();
+        dispatch(setup_program_[0], pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        const uint64_t texels = uint64_t(options_.grid_width) * options_.grid_height;
+        scanner_.scan(ScanKind::Exclusive, {counts_.id(), 0, counts_.size()}, {counts_.id(), 0, counts_.size()}, texels + 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT);
+        bindStencilPass();  // the scan used bindings of its own
+        dispatch(setup_program_[1], pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // (5) the footprint light pass.
+        if (casters.index_count > 0) {
+            glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
+            glVertexArrayVertexBuffer(vao_, 0, casters.positions.buffer, static_cast<GLintptr>(casters.positions.offset),
+                                      static_cast<GLsizei>(casters.stride));
+            glVertexArrayElementBuffer(vao_, casters.indices.buffer);
+            glBindVertexArray(vao_);
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
+            glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+            glDisable(GL_DEPTH_TEST);
+            glDisable(GL_CULL_FACE);
+            glDisable(GL_RASTERIZER_DISCARD);
+            glUseProgram(classify_program_.id());
+            glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT,
+                           reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset)));
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        // (6) final bits.
+        dispatch(finish_program_, pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        ran_ = true;
+        return Status::Ok;
+    }
+
+    /// The hard pipeline's input for `mode` (Edge: sub-samples of flagged pixels; Full: of every
+    /// pixel) from the last run: positions and normals, sampleBufferBytes() each, 16-byte aligned.
+    Status writeSampleBuffer(AaMode mode, const BufferRange& positions, const BufferRange& normals) {
+        if (!ran_) return Status::NotReserved;
+        if (mode == AaMode::Off) return Status::InvalidArgument;
+        if (positions.size < sampleBufferBytes() || normals.size < sampleBufferBytes() || !positions.buffer || !normals.buffer)
+            return Status::RangeTooSmall;
+        if (positions.offset % 16 || normals.offset % 16) return Status::Misaligned;
+        setMode(mode);
+        bindCommon();
+        bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
+        bindRange(PENUMBRA_AA_BINDING_OUT_POSITIONS, positions);
+        bindRange(PENUMBRA_AA_BINDING_OUT_NORMALS, normals);
+        dispatch(buffer_program_, pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        return Status::Ok;
+    }
+
+    /// Per-pixel visibility (float [P]) from the hard pipeline's states: Off reads P states (the
+    /// centres), Edge and Full P (1 + N) (writeSampleBuffer's layout).
+    Status resolve(AaMode mode, const BufferRange& states, const BufferRange& visible) {
+        if (mode != AaMode::Off && !ran_) return Status::NotReserved;
+        const uint64_t need = 4ull * pixels_ * (mode == AaMode::Off ? 1 : 1 + pattern_.samples);
+        if (states.size < need || visible.size < 4ull * pixels_ || !states.buffer || !visible.buffer) return Status::RangeTooSmall;
+        if (states.offset % 4 || visible.offset % 4) return Status::Misaligned;
+        if (!ran_) {  // Off before any run: the parameter block still needs the sizes
+            params_staging_.view = glm::uvec4(width_, height_, pattern_.samples, 1u);
+            glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
+        }
+        setMode(mode);
+        bindCommon();
+        bindRange(PENUMBRA_AA_BINDING_STATES, states);
+        bindRange(PENUMBRA_AA_BINDING_VISIBLE, visible);
+        dispatch(resolve_program_, pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        return Status::Ok;
+    }
+
+    const Buffer& subSamples() const { return sub_samples_; }
+    const Buffer& stencil() const { return stencil_; }
+    /// Read-backs (they wait for the GPU): for tests and tools, not for the frame.
+    std::vector<uint32_t> readStencil() const { return stencil_.download<uint32_t>(); }
+    std::vector<glm::vec4> readSubSamples() const { return sub_samples_.download<glm::vec4>(); }
+    std::array<uint32_t, PENUMBRA_AA_STATUS_WORDS> readStatus() const {
+        const std::vector<uint32_t> s = status_.download<uint32_t>();
+        std::array<uint32_t, PENUMBRA_AA_STATUS_WORDS> out{};
+        for (size_t i = 0; i < out.size(); ++i) out[i] = s[i];
+        return out;
+    }
+
+private:
+    void setMode(AaMode mode) {
+        params_staging_.grid.w = mode == AaMode::Off ? PENUMBRA_AA_MODE_OFF : mode == AaMode::Edge ? PENUMBRA_AA_MODE_EDGE : PENUMBRA_AA_MODE_FULL;
+        glNamedBufferSubData(params_.id(), offsetof(AaParams, grid), sizeof(glm::uvec4), &params_staging_.grid);
+    }
+    static void bindRange(GLuint binding, const BufferRange& r) {
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, binding, r.buffer, static_cast<GLintptr>(r.offset), static_cast<GLsizeiptr>(r.size));
+    }
+    void bindCommon() {
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_AA_BINDING_PARAMS, params_.id());
+        if (centres_.buffer) bindRange(PENUMBRA_AA_BINDING_CENTRES, centres_);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_SUB_SAMPLES, sub_samples_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STENCIL, stencil_.id());
+    }
+    void bindStencilPass() {
+        bindCommon();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_FOOTPRINTS, footprints_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COUNTS, counts_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_CURSOR, cursor_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_LIST, list_.id());
+    }
+    void dispatch(const Program& program, uint64_t invocations) {
+        if (invocations == 0) return;
+        const auto grid = ::penumbra::detail::foldDispatch(::penumbra::detail::divUp(invocations, PENUMBRA_AA_GROUP_SIZE));
+        glUseProgram(program.id());
+        glDispatchCompute(grid.x, grid.y, 1);
+    }
+
+    uint32_t width_ = 0, height_ = 0, pixels_ = 0;
+    AliasFreeHardOptions options_;
+    AaPatternOptions pattern_;
+    ProvableStencilOptions stencil_options_;
+    uint32_t capacity_ = 0;
+    ConservativeRasterSetup conservative_;
+    Scanner scanner_;
+    AaParams params_staging_{};
+    BufferRange centres_{}, normals_{};
+    bool ran_ = false;
+    Buffer sub_samples_, stencil_, footprints_, counts_, cursor_, list_, status_, params_, conservative_ubo_;
+    Program footprints_program_, setup_program_[2], classify_program_, finish_program_, buffer_program_, resolve_program_;
+    GLuint vao_ = 0, fbo_ = 0;
+};
+
+}  // namespace penumbra::gl
+
+#endif
