@@ -72,7 +72,8 @@ inline constexpr uint32_t kAaMaxSamples = PENUMBRA_AA_MAX_SAMPLES;
 /// Loop iterations one light-pass fragment may spend (llvmpipe stops an invocation's loops after
 /// 65 535): a texel's list is walked only when list length x (N + 2) stays below it.
 inline constexpr uint32_t kAaLoopBudget = 65000;
-inline constexpr double kAaMaxStretch = 8.0;  ///< sub-sample distance limit, in fronto-parallel pixel widths
+inline constexpr double kAaMaxStretch = 8.0;
+inline constexpr double kAaBoxSlack = 1.0 / 64.0;  ///< texels added around a footprint's light-space box (setup.comp.glsl)  ///< sub-sample distance limit, in fronto-parallel pixel widths
 
 /// Value-initialised = rotated grid 4x.
 struct AaPatternOptions {
@@ -502,9 +503,11 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
             ++out.outside;
             continue;
         }
-        // One texel of slack on every side: float rounding of the projection.
-        const int x0 = std::max(0, int(std::floor(lo.x)) - 1), y0 = std::max(0, int(std::floor(lo.y)) - 1);
-        const int x1 = std::min(int(gw) - 1, int(std::floor(hi.x)) + 1), y1 = std::min(int(gh) - 1, int(std::floor(hi.y)) + 1);
+        // kAaBoxSlack texels of slack on every side: the casters' hulls come from float clip
+        // coordinates (~1e-4 texel from the exact projection even at 4096^2).
+        const int x0 = std::max(0, int(std::floor(lo.x - kAaBoxSlack))), y0 = std::max(0, int(std::floor(lo.y - kAaBoxSlack)));
+        const int x1 = std::min(int(gw) - 1, int(std::floor(hi.x + kAaBoxSlack)));
+        const int y1 = std::min(int(gh) - 1, int(std::floor(hi.y + kAaBoxSlack)));
         if (uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1) > so.max_footprint_texels) {
             out.flags[i] = 1;
             ++out.over_limits;

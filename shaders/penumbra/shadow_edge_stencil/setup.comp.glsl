@@ -1,5 +1,5 @@
 // penumbra — shadow-edge stencil, passes 2 and 4: bins each active pixel's footprint (its centre
-// and N sub-samples) into every light texel its box touches, one texel of slack per side (the twin:
+// and N sub-samples) into every light texel its box touches, 1/64 texel of slack per side (the twin:
 // provableEdgeStencilCpu). PENUMBRA_AA_PASS 0: box, bounding sphere, counts per texel (a point
 // outside the light's frustum, or a box over limits.x texels: FLAG — multi-sampling is always
 // safe); 1, after the exclusive scan of the counts: scatter pixel ids to offsets[texel] + cursor (a
@@ -55,8 +55,9 @@ void main() {
         lo = min(lo, g);
         hi = max(hi, g);
     }
-    ivec4 box = ivec4(max(0, int(floor(lo.x)) - 1), max(0, int(floor(lo.y)) - 1), min(int(gw) - 1, int(floor(hi.x)) + 1),
-                      min(int(gh) - 1, int(floor(hi.y)) + 1));
+    // 1/64 texel of slack (kAaBoxSlack): the casters' hulls come from float clip coordinates.
+    ivec4 box = ivec4(max(0, int(floor(lo.x - 0.015625lf))), max(0, int(floor(lo.y - 0.015625lf))),
+                      min(int(gw) - 1, int(floor(hi.x + 0.015625lf))), min(int(gh) - 1, int(floor(hi.y + 0.015625lf))));
     uint texels = inside ? uint(box.z - box.x + 1) * uint(box.w - box.y + 1) : 0u;
     if (!inside || texels > penumbraAaParams.limits.x) {
         penumbraAaStencil[i] = PENUMBRA_AA_FLAG;
