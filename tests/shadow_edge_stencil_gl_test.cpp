@@ -146,6 +146,45 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
     CHECK(missed == 0);
     CHECK(visible[0] == visible[1]);
     CHECK(flagged > 0);
+
+    // galoppo2010's Chebyshev stencil on the GPU: the moment map and the flags against the twins.
+    for (const bool inner : {false, true}) {
+        penumbra::ChebyshevStencilOptions co;
+        co.inner_shadow_proof = inner;
+        penumbra::gl::ShadowEdgeStencil chebyshev(f.width, f.height, o, pattern, {}, 1u << 16,
+                                                  penumbra::ShaderLibrary::embedded(), penumbra::gl::AaStencilKind::Chebyshev, co);
+        REQUIRE(chebyshev.run(f.centreRange(), f.normalRange(), f.view, light, f.casterBuffers()) == penumbra::Status::Ok);
+        const penumbra::MomentMapCpu map = penumbra::conservativeMomentMapCpu(o, light, f.casters());
+        std::vector<glm::vec2> cpu_moments;
+        std::vector<float> cpu_covers;
+        for (size_t l = 0; l < map.levels.size(); ++l) {
+            cpu_moments.insert(cpu_moments.end(), map.levels[l].begin(), map.levels[l].end());
+            cpu_covers.insert(cpu_covers.end(), map.cover[l].begin(), map.cover[l].end());
+        }
+        const std::vector<glm::vec2> gpu_moments = chebyshev.readMoments();
+        const std::vector<float> gpu_covers = chebyshev.readCovers();
+        REQUIRE(gpu_moments.size() == cpu_moments.size());
+        size_t moment_bits = 0, cover_bits = 0;
+        for (size_t t = 0; t < cpu_moments.size(); ++t) {
+            moment_bits += std::memcmp(&gpu_moments[t], &cpu_moments[t], sizeof(glm::vec2)) != 0;
+            cover_bits += std::memcmp(&gpu_covers[t], &cpu_covers[t], sizeof(float)) != 0;
+        }
+        const std::vector<uint8_t> cpu_flags = penumbra::chebyshevEdgeStencilCpu(map, light, gpu_f, co);
+        const std::vector<uint32_t> gpu_cheb = chebyshev.readStencil();
+        size_t flag_diff = 0, cheb_flagged = 0, cheb_missed = 0;
+        for (uint32_t i = 0; i < p; ++i) {
+            flag_diff += (gpu_cheb[i] == PENUMBRA_AA_FLAG) != (cpu_flags[i] != 0) || (gpu_cheb[i] & ~PENUMBRA_AA_FLAG) != 0;
+            if (f.centres[i].w == 0.0f) continue;
+            cheb_flagged += cpu_flags[i];
+            bool agree = true;
+            for (uint32_t k = 0; k < samples; ++k) agree = agree && states[1][p + size_t(i) * samples + k] == states[1][i];
+            cheb_missed += !agree && !cpu_flags[i];
+        }
+        MESSAGE(name << std::string(inner ? ", Chebyshev + inner proof: " : ", Chebyshev: ") << cheb_flagged << " flagged, " << cheb_missed
+                     << " edge pixels missed; moments differing " << moment_bits << ", covers " << cover_bits << ", flags " << flag_diff);
+        PENUMBRA_CHECK_BITWISE("moment map == conservativeMomentMapCpu", moment_bits + cover_bits == 0);
+        PENUMBRA_CHECK_BITWISE("Chebyshev flags == chebyshevEdgeStencilCpu", flag_diff == 0);
+    }
 }
 
 }  // namespace

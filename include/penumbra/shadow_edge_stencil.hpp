@@ -60,8 +60,8 @@ namespace penumbra {
 
 using AaParams = shared::PenumbraAaParams;
 using AaFootprintRecord = shared::PenumbraAaFootprint;
-static_assert(sizeof(AaParams) == 928 && offsetof(AaParams, numbers) == 256 && offsetof(AaParams, light_clip) == 288 &&
-                  offsetof(AaParams, offsets) == 368 && offsetof(AaParams, view) == 880,
+static_assert(sizeof(AaParams) == 960 && offsetof(AaParams, numbers) == 256 && offsetof(AaParams, light_clip) == 288 &&
+                  offsetof(AaParams, offsets) == 368 && offsetof(AaParams, view) == 880 && offsetof(AaParams, chebyshev) == 928,
               "PenumbraAaParams: the std140 offsets the shaders assume");
 static_assert(sizeof(AaFootprintRecord) == 64, "PenumbraAaFootprint: 64 bytes (std430)");
 
@@ -588,47 +588,12 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
     return out;
 }
 
-/// The GPU kernels' parameter block (pure setup): the view, the light (its view_projection must see
-/// every centre and sub-sample), the hard pipeline's exact-test settings, the rotated-grid pattern
-/// (the GPU runs the rotated grid only: a jittered pattern differs per pixel), the light grid
-/// (options.grid_width x grid_height), the list capacity and the limits, and the mode of the
-/// sample-buffer and resolve kernels.
-inline AaParams aaParams(const SampleListsView& view, const SampleListsLight& light, const AliasFreeHardOptions& options,
-                         const AaPatternOptions& pattern, const ProvableStencilOptions& so, uint32_t list_capacity,
-                         uint32_t mode) {
-    checkAaPatternOptions(pattern);
-    PENUMBRA_CHECK(pattern.pattern == AaPattern::RotatedGrid,
-                   "penumbra::aaParams: the GPU stencil runs the rotated-grid pattern only (jittered: the CPU path)");
-    AaParams p{};
-    const glm::dmat4 inverse(view.inverse_view_projection), vp(light.view_projection);
-    for (int c = 0; c < 4; ++c) {
-        p.inverse_view_projection[c] = inverse[c];
-        p.light_view_projection[c] = vp[c];
-    }
-    p.numbers = glm::dvec4(options.coplanar_epsilon, double(options.directional_reach), view.depth_zero_to_one ? 0.0 : -1.0, 0.0);
-    p.light_clip = light.view_projection;
-    p.light = light.light;
-    for (uint32_t k = 0; k < pattern.samples; ++k) {
-        const glm::vec2 o = aaSubSampleOffset(pattern, 0, k);
-        if (k % 2 == 0) {
-            p.offsets[k / 2].x = o.x;
-            p.offsets[k / 2].y = o.y;
-        } else {
-            p.offsets[k / 2].z = o.x;
-            p.offsets[k / 2].w = o.y;
-        }
-    }
-    p.view = glm::uvec4(view.width, view.height, pattern.samples, so.cull_back_facing ? 1u : 0u);
-    p.grid = glm::uvec4(options.grid_width, options.grid_height, list_capacity, mode);
-    p.limits = glm::uvec4(so.max_footprint_texels, so.maxList(pattern.samples), 0u, 0u);
-    return p;
-}
-
 // ---------------------------------------------------------------------------------------------
 // The Chebyshev (variance shadow map) stencil
 
 /// Conservative moment map: level 0 holds, per light texel, (d, d^2) of the minimum caster depth
-/// over the texel's area (every texel a caster touches: conservative raster), d = -1/w for a
+/// over the texel's area (every texel a caster overlaps by more than 2^-10 texel: conservative
+/// raster up to that sliver, detail::aaDepthTexel; the GPU builds the same bits), d = -1/w for a
 /// perspective light (affine in screen space on a plane, increasing with distance), z_ndc for an
 /// orthographic one; texels no caster touches hold d_far (beyond every sample). Levels average
 /// 2x2 (odd sizes: the last row/column repeats), down to 1x1.
@@ -647,6 +612,116 @@ struct MomentMapCpu {
 
 namespace detail {
 inline double aaLightDepth(const glm::dvec4& clip, bool perspective) { return perspective ? -1.0 / clip.w : clip.z / clip.w; }
+
+/// A caster triangle in the moment map's texel space (moments.geom.glsl computes the same): the
+/// triangle clipped to w >= 1e-4 w_max (a caster reaching behind the light keeps the exact depths
+/// of its part in front), at most 4 vertices (x, y, d); the depth plane d = g0 + ga x + gb y
+/// (affine on a plane: d = -1/w, or z_ndc for an orthographic light) fitted on the widest fan
+/// triangle; the clipped vertices' depth range; the winding.
+struct AaDepthTriangle {
+    glm::dvec3 s[4];
+    int count = 0;
+    double ga = 0, gb = 0, g0 = 0, dmin = 0, dmax = 0, orientation = 1;
+    glm::dvec2 lo{0.0}, hi{0.0};
+};
+
+inline bool aaDepthTriangle(const glm::dmat4& vp, const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p2,
+                            uint32_t width, uint32_t height, bool perspective, AaDepthTriangle& t) {
+    const glm::dvec4 h[3] = {aaTransform(vp, glm::dvec4(p0, 1.0)), aaTransform(vp, glm::dvec4(p1, 1.0)),
+                             aaTransform(vp, glm::dvec4(p2, 1.0))};
+    const double w_max = std::max(h[0].w, std::max(h[1].w, h[2].w));
+    if (!(w_max > 0.0)) return false;
+    const double w_min = perspective ? mulRounded(1e-4, w_max) : -1e300;
+    t.count = 0;
+    for (int k = 0; k < 3; ++k) {
+        const glm::dvec4& a = h[k];
+        const glm::dvec4& b = h[(k + 1) % 3];
+        const auto emit = [&](const glm::dvec4& c) {
+            t.s[t.count++] = glm::dvec3(aaGrid(c.x, c.w, width), aaGrid(c.y, c.w, height), aaLightDepth(c, perspective));
+        };
+        if (a.w >= w_min) emit(a);
+        if ((a.w >= w_min) != (b.w >= w_min)) {
+            const double f = (w_min - a.w) / (b.w - a.w);
+            emit(glm::dvec4(a.x + mulRounded(b.x - a.x, f), a.y + mulRounded(b.y - a.y, f), a.z + mulRounded(b.z - a.z, f),
+                            a.w + mulRounded(b.w - a.w, f)));
+        }
+    }
+    if (t.count < 3) return false;
+    t.dmin = std::numeric_limits<double>::infinity();
+    t.dmax = -t.dmin;
+    t.lo = glm::dvec2(1e300);
+    t.hi = glm::dvec2(-1e300);
+    double area = 0.0;
+    for (int j = 0; j < t.count; ++j) {
+        const glm::dvec3& q = t.s[(j + 1) % t.count];
+        t.dmin = std::min(t.dmin, t.s[j].z);
+        t.dmax = std::max(t.dmax, t.s[j].z);
+        t.lo = glm::min(t.lo, glm::dvec2(t.s[j]));
+        t.hi = glm::max(t.hi, glm::dvec2(t.s[j]));
+        area = area + (mulRounded(t.s[j].x, q.y) - mulRounded(q.x, t.s[j].y));
+    }
+    t.orientation = area > 0.0 ? 1.0 : -1.0;
+    double best = 0.0;
+    t.ga = t.gb = 0.0;
+    t.g0 = t.dmin;  // edge-on from the light: the vertices' minimum
+    for (int j = 1; j + 1 < t.count; ++j) {
+        const glm::dvec3 e1 = t.s[j] - t.s[0], e2 = t.s[j + 1] - t.s[0];
+        const double det = mulRounded(e1.x, e2.y) - mulRounded(e1.y, e2.x);
+        if (std::abs(det) > best) {
+            best = std::abs(det);
+            t.ga = (mulRounded(e1.z, e2.y) - mulRounded(e2.z, e1.y)) / det;
+            t.gb = (mulRounded(e2.z, e1.x) - mulRounded(e1.z, e2.x)) / det;
+            t.g0 = (t.s[0].z - mulRounded(t.ga, t.s[0].x)) - mulRounded(t.gb, t.s[0].y);
+        }
+    }
+    return true;
+}
+
+/// Whether the clipped triangle overlaps texel (x, y) by more than 2^-10 texel along every
+/// separating axis (a contact thinner than that is left out: the GPU's hull comes from float
+/// coordinates), and if so the triangle's least depth over the texel (the plane's corner minimum,
+/// no lower than its nearest vertex, minus a relative 1e-6) and its cover value (the largest depth
+/// over the texel when all four corners are strictly inside the triangle, else +inf).
+inline bool aaDepthTexel(const AaDepthTriangle& t, int x, int y, double& d, double& c) {
+    constexpr double margin = 1.0 / 1024.0;
+    const double x0 = x, y0 = y, x1 = x + 1.0, y1 = y + 1.0;
+    if (!(t.hi.x > x0 + margin && t.lo.x < x1 - margin && t.hi.y > y0 + margin && t.lo.y < y1 - margin)) return false;
+    for (int j = 0; j < t.count; ++j) {
+        const glm::dvec3& a = t.s[j];
+        const glm::dvec3& b = t.s[(j + 1) % t.count];
+        const double nx = b.y - a.y, ny = a.x - b.x;  // edge normal
+        double poly_lo = 1e300, poly_hi = -1e300;
+        for (int k = 0; k < t.count; ++k) {
+            const double v = mulRounded(nx, t.s[k].x) + mulRounded(ny, t.s[k].y);
+            poly_lo = std::min(poly_lo, v);
+            poly_hi = std::max(poly_hi, v);
+        }
+        const double bx0 = mulRounded(nx, x0), bx1 = mulRounded(nx, x1), by0 = mulRounded(ny, y0), by1 = mulRounded(ny, y1);
+        const double box_lo = std::min(bx0, bx1) + std::min(by0, by1), box_hi = std::max(bx0, bx1) + std::max(by0, by1);
+        const double slack = mulRounded(margin, std::abs(nx) + std::abs(ny));
+        if (!(poly_hi > box_lo + slack && poly_lo < box_hi - slack)) return false;
+    }
+    const double corner = (t.g0 + std::min(mulRounded(t.ga, x0), mulRounded(t.ga, x1))) +
+                          std::min(mulRounded(t.gb, y0), mulRounded(t.gb, y1));
+    d = std::max(corner, t.dmin);
+    d = d - mulRounded(1e-6, (std::abs(d) + std::abs(t.ga)) + std::abs(t.gb));
+    c = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 4; ++k) {
+        const double cx = (k & 1) ? x1 : x0, cy = (k >> 1) ? y1 : y0;
+        for (int j = 0; j < t.count; ++j) {
+            const glm::dvec3& a = t.s[j];
+            const glm::dvec3& b = t.s[(j + 1) % t.count];
+            const double e = mulRounded(b.x - a.x, cy - a.y) - mulRounded(b.y - a.y, cx - a.x);
+            const double scale = ((std::abs(b.x - a.x) + std::abs(b.y - a.y)) + std::abs(cx - a.x)) + std::abs(cy - a.y);
+            if (!(mulRounded(e, t.orientation) > mulRounded(mulRounded(1e-9, scale), scale))) return true;
+        }
+    }
+    const double far_corner = (t.g0 + std::max(mulRounded(t.ga, x0), mulRounded(t.ga, x1))) +
+                              std::max(mulRounded(t.gb, y0), mulRounded(t.gb, y1));
+    c = std::min(far_corner, t.dmax);
+    c = c + mulRounded(1e-6, (std::abs(c) + std::abs(t.ga)) + std::abs(t.gb));
+    return true;
+}
 }  // namespace detail
 
 /// Builds the moment map over options.grid_width x grid_height with light.view_projection (the
@@ -664,7 +739,6 @@ inline MomentMapCpu conservativeMomentMapCpu(const AliasFreeHardOptions& options
     m.d_far = m.perspective ? 0.0f : 2.0f;  // -1/w < 0 in front of a perspective light; z_ndc <= 1
     std::vector<double> depth(size_t(m.width) * m.height, double(m.d_far));
     std::vector<double> cover(depth.size(), std::numeric_limits<double>::infinity());
-    const ConservativeRasterSetup cr = afhConservativeSetup(options);
     const glm::dmat4 vp(light.view_projection);
     const auto& P = *casters.positions;
     const auto& I = *casters.indices;
@@ -672,97 +746,29 @@ inline MomentMapCpu conservativeMomentMapCpu(const AliasFreeHardOptions& options
         const glm::vec3 v[3] = {P[I[3 * t]], P[I[3 * t + 1]], P[I[3 * t + 2]]};
         if (detail::degenerateTriangle(glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]))) continue;
         if (detail::afhCulled(options, (*casters.closed)[t] != 0, v, light.light)) continue;
-        const glm::vec4 clip[3] = {light.view_projection * glm::vec4(v[0], 1.0f), light.view_projection * glm::vec4(v[1], 1.0f),
-                                   light.view_projection * glm::vec4(v[2], 1.0f)};
-        const std::vector<glm::dvec2> polygon = conservativeReferencePolygon(clip[0], clip[1], clip[2], cr);
-        if (polygon.empty()) continue;
-        // Depth plane d(x, y) in texel coordinates (d = -1/w is affine in screen space on a plane):
-        // fitted to the triangle clipped to w >= w_min (a caster reaching behind the light keeps the
-        // exact depths of its part in front); the minimum also bounded by the clipped vertices'.
-        glm::dvec4 h[3];
-        double w_max = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            h[k] = vp * glm::dvec4(glm::dvec3(v[k]), 1.0);
-            w_max = std::max(w_max, h[k].w);
-        }
-        if (!(w_max > 0.0)) continue;
-        const double w_min = m.perspective ? 1e-4 * w_max : -1e300;
-        std::vector<glm::dvec3> s;  // (x, y, d) of the clipped polygon
-        for (int k = 0; k < 3; ++k) {
-            const glm::dvec4& a = h[k];
-            const glm::dvec4& b = h[(k + 1) % 3];
-            const auto emit = [&](const glm::dvec4& c) {
-                s.emplace_back((c.x / c.w * 0.5 + 0.5) * m.width, (c.y / c.w * 0.5 + 0.5) * m.height,
-                               detail::aaLightDepth(c, m.perspective));
-            };
-            if (a.w >= w_min) emit(a);
-            if ((a.w >= w_min) != (b.w >= w_min)) emit(a + (b - a) * ((w_min - a.w) / (b.w - a.w)));
-        }
-        if (s.size() < 3) continue;
-        double dmin = std::numeric_limits<double>::infinity(), dmax = -dmin, area = 0.0;
-        for (size_t j = 0; j < s.size(); ++j) {
-            dmin = std::min(dmin, s[j].z);
-            dmax = std::max(dmax, s[j].z);
-            const glm::dvec3& q = s[(j + 1) % s.size()];
-            area += s[j].x * q.y - q.x * s[j].y;
-        }
-        const double orientation = area > 0.0 ? 1.0 : -1.0;
-        double ga = 0.0, gb = 0.0, g0 = dmin, best = 0.0;
-        for (size_t j = 1; j + 1 < s.size(); ++j) {
-            const glm::dvec3 e1 = s[j] - s[0], e2 = s[j + 1] - s[0];
-            const double det = e1.x * e2.y - e1.y * e2.x;
-            if (std::abs(det) > best) {
-                best = std::abs(det);
-                ga = (e1.z * e2.y - e2.z * e1.y) / det;
-                gb = (e2.z * e1.x - e1.z * e2.x) / det;
-                g0 = s[0].z - ga * s[0].x - gb * s[0].y;
-            }
-        }
-        if (best == 0.0) ga = gb = 0.0, g0 = dmin;  // edge-on from the light: the vertices' minimum
-        glm::dvec2 lo(1e300), hi(-1e300);
-        for (const auto& q : polygon) {
-            lo = glm::min(lo, q);
-            hi = glm::max(hi, q);
-        }
-        const int x0 = std::max(0, int(std::floor(lo.x))), y0 = std::max(0, int(std::floor(lo.y)));
-        const int x1 = std::min(int(m.width) - 1, int(std::floor(hi.x))), y1 = std::min(int(m.height) - 1, int(std::floor(hi.y)));
+        detail::AaDepthTriangle tri;
+        if (!detail::aaDepthTriangle(vp, glm::dvec3(v[0]), glm::dvec3(v[1]), glm::dvec3(v[2]), m.width, m.height, m.perspective,
+                                     tri))
+            continue;
+        const int x0 = std::max(0, int(std::floor(tri.lo.x))), y0 = std::max(0, int(std::floor(tri.lo.y)));
+        const int x1 = std::min(int(m.width) - 1, int(std::floor(tri.hi.x)));
+        const int y1 = std::min(int(m.height) - 1, int(std::floor(tri.hi.y)));
         for (int y = y0; y <= y1; ++y) {
             for (int x = x0; x <= x1; ++x) {
-                if (!polygonTouchesPixel(polygon.data(), polygon.size(), x, y)) continue;
-                // The plane's minimum over the texel square (a corner), no lower than the clipped
-                // triangle's nearest vertex; minus a relative rounding margin.
-                const double corner = g0 + std::min(ga * x, ga * (x + 1)) + std::min(gb * y, gb * (y + 1));
-                double d = std::max(corner, dmin);
-                d -= 1e-6 * (std::abs(d) + std::abs(ga) + std::abs(gb));
+                double d = 0.0, c = 0.0;
+                if (!detail::aaDepthTexel(tri, x, y, d, c)) continue;
                 double& texel = depth[size_t(y) * m.width + x];
                 texel = std::min(texel, d);
-                // Inner coverage: every corner strictly inside the clipped triangle (convex).
-                bool inside = true;
-                for (int k = 0; k < 4 && inside; ++k) {
-                    const double cx = x + (k & 1), cy = y + (k >> 1);
-                    for (size_t j = 0; j < s.size() && inside; ++j) {
-                        const glm::dvec3& a = s[j];
-                        const glm::dvec3& b = s[(j + 1) % s.size()];
-                        const double e = (b.x - a.x) * (cy - a.y) - (b.y - a.y) * (cx - a.x);
-                        const double scale = std::abs(b.x - a.x) + std::abs(b.y - a.y) + std::abs(cx - a.x) + std::abs(cy - a.y);
-                        if (!(e * orientation > 1e-9 * scale * scale)) inside = false;
-                    }
-                }
-                if (inside) {
-                    const double far_corner = g0 + std::max(ga * x, ga * (x + 1)) + std::max(gb * y, gb * (y + 1));
-                    double c = std::min(far_corner, dmax);
-                    c += 1e-6 * (std::abs(c) + std::abs(ga) + std::abs(gb));
-                    double& covered = cover[size_t(y) * m.width + x];
-                    covered = std::min(covered, c);
-                }
+                double& covered = cover[size_t(y) * m.width + x];
+                covered = std::min(covered, c);
             }
         }
     }
     m.cover.emplace_back(cover.begin(), cover.end());  // +inf stays +inf in float
     m.levels.emplace_back(depth.size());
     for (size_t i = 0; i < depth.size(); ++i) {
-        const double d = depth[i];
-        m.levels[0][i] = glm::vec2(float(d), float(d * d));
+        const double d = double(float(depth[i]));  // the GPU keeps the float (atomicMin on its bits)
+        m.levels[0][i] = glm::vec2(float(d), float(detail::mulRounded(d, d)));
     }
     for (uint32_t l = 1; m.levelWidth(l - 1) > 1 || m.levelHeight(l - 1) > 1; ++l) {
         const uint32_t pw = m.levelWidth(l - 1), ph = m.levelHeight(l - 1), w = m.levelWidth(l), h = m.levelHeight(l);
@@ -778,7 +784,7 @@ inline MomentMapCpu conservativeMomentMapCpu(const AliasFreeHardOptions& options
                     sum += glm::dvec2(prev[size_t(sy) * pw + sx]);
                     covered = std::max(covered, m.cover[l - 1][size_t(sy) * pw + sx]);
                 }
-                next[size_t(y) * w + x] = glm::vec2(sum * 0.25);
+                next[size_t(y) * w + x] = glm::vec2(float(sum.x * 0.25), float(sum.y * 0.25));
                 next_cover[size_t(y) * w + x] = covered;
             }
         m.levels.push_back(std::move(next));
@@ -815,6 +821,7 @@ inline std::vector<uint8_t> chebyshevEdgeStencilCpu(const MomentMapCpu& m, const
     std::vector<uint8_t> flags(f.pixels, 0);
     const glm::dmat4 vp(light.view_projection);
     const uint32_t levels = uint32_t(m.levels.size());
+    PENUMBRA_CHECK(levels > 0 || f.pixels == 0, "penumbra::chebyshevEdgeStencilCpu: an empty moment map");
     for (uint32_t i = 0; i < f.pixels; ++i) {
         if (f.centres[i].w == 0.0f) continue;
         const glm::vec4* subs = f.subSamples(i);
@@ -833,12 +840,12 @@ inline std::vector<uint8_t> chebyshevEdgeStencilCpu(const MomentMapCpu& m, const
         bool inside = true;
         for (uint32_t k = 0; k <= f.samples && inside; ++k) {
             const glm::vec4 p = k == 0 ? f.centres[i] : subs[k - 1];
-            const glm::dvec4 c = vp * glm::dvec4(glm::dvec3(p), 1.0);
+            const glm::dvec4 c = detail::aaTransform(vp, glm::dvec4(glm::dvec3(glm::vec3(p)), 1.0));
             if (!(c.w > 0.0)) {
                 inside = false;
                 break;
             }
-            const glm::dvec2 g((c.x / c.w * 0.5 + 0.5) * m.width, (c.y / c.w * 0.5 + 0.5) * m.height);
+            const glm::dvec2 g(detail::aaGrid(c.x, c.w, m.width), detail::aaGrid(c.y, c.w, m.height));
             if (!(g.x >= 0.0 && g.x <= m.width && g.y >= 0.0 && g.y <= m.height)) inside = false;
             lo = glm::min(lo, g);
             hi = glm::max(hi, g);
@@ -850,40 +857,98 @@ inline std::vector<uint8_t> chebyshevEdgeStencilCpu(const MomentMapCpu& m, const
             flags[i] = 1;
             continue;
         }
+        // The level whose texels are at least the footprint's extent: at most 2x2 texels read.
         const double extent = std::max(hi.x - lo.x, hi.y - lo.y);
-        uint32_t level = extent <= 1.0 ? 0u : uint32_t(std::ceil(std::log2(extent)));
-        level = std::min(level, levels - 1);
-        const double scale = std::ldexp(1.0, -int(level));
+        uint32_t level = 0;
+        double span = 1.0;
+        while (span < extent && level + 1 < levels) {
+            span = span * 2.0;
+            ++level;
+        }
         const uint32_t lw = m.levelWidth(level), lh = m.levelHeight(level);
-        const int x0 = std::clamp(int(std::floor(lo.x * scale)), 0, int(lw) - 1), x1 = std::clamp(int(std::floor(hi.x * scale)), 0, int(lw) - 1);
-        const int y0 = std::clamp(int(std::floor(lo.y * scale)), 0, int(lh) - 1), y1 = std::clamp(int(std::floor(hi.y * scale)), 0, int(lh) - 1);
-        glm::dvec2 mom(0.0);
+        const int x0 = std::clamp(int(std::floor(lo.x / span)), 0, int(lw) - 1), x1 = std::clamp(int(std::floor(hi.x / span)), 0, int(lw) - 1);
+        const int y0 = std::clamp(int(std::floor(lo.y / span)), 0, int(lh) - 1), y1 = std::clamp(int(std::floor(hi.y / span)), 0, int(lh) - 1);
+        double sum_x = 0.0, sum_y = 0.0;
         int n = 0;
         for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x, ++n) mom += glm::dvec2(m.levels[level][size_t(y) * lw + x]);
-        mom /= double(n);
-        const double mu = mom.x;
-        const double var = std::max(double(o.min_variance), mom.y - mu * mu);
+            for (int x = x0; x <= x1; ++x, ++n) {
+                sum_x = sum_x + double(m.levels[level][size_t(y) * lw + x].x);
+                sum_y = sum_y + double(m.levels[level][size_t(y) * lw + x].y);
+            }
+        const double mu = sum_x / double(n);
+        const double var = std::max(double(o.min_variance), sum_y / double(n) - detail::mulRounded(mu, mu));
+        const double threshold = double(o.threshold);
         bool decided = false;
         if (o.inner_shadow_proof) {
             // Fully shadowed, proven: each texel read lies inside a triangle in front of t_min.
             float covered = -std::numeric_limits<float>::infinity();
             for (int y = y0; y <= y1; ++y)
                 for (int x = x0; x <= x1; ++x) covered = std::max(covered, m.cover[level][size_t(y) * lw + x]);
-            decided = double(covered) < t_min - 1e-6 * std::abs(t_min);
+            decided = double(covered) < t_min - detail::mulRounded(1e-6, std::abs(t_min));
         } else if (t_min > mu) {
             // Fully shadowed: even the nearest point has P(x >= t_min) < threshold.
-            decided = var / (var + (t_min - mu) * (t_min - mu)) < o.threshold;
+            const double gap = t_min - mu;
+            decided = var / (var + detail::mulRounded(gap, gap)) < threshold;
         }
         // Fully lit: P(x < t_min - bias) < threshold. The receiver lies in the map itself: over the
-        // <= 2x2 texels read (2^(level+1) level-0 texels wide) its depth spreads by about the
-        // footprint's depth extent times (region width / footprint width); bias_scale of that.
-        const double spread = (t_max - t_min) * std::ldexp(2.0, int(level)) / std::max(extent, 0x1.0p-20);
-        const double t_lit = t_min - double(o.bias_scale) * spread;
-        if (!decided && t_lit < mu) decided = var / (var + (mu - t_lit) * (mu - t_lit)) < o.threshold;
+        // <= 2x2 texels read (2 span level-0 texels wide) its depth spreads by about the footprint's
+        // depth extent times (region width / footprint width); bias_scale of that.
+        const double spread = detail::mulRounded(t_max - t_min, 2.0 * span) / std::max(extent, 0x1.0p-20);
+        const double t_lit = t_min - detail::mulRounded(double(o.bias_scale), spread);
+        if (!decided && t_lit < mu) {
+            const double gap = mu - t_lit;
+            decided = var / (var + detail::mulRounded(gap, gap)) < threshold;
+        }
         flags[i] = decided ? 0 : 1;
     }
     return flags;
+}
+
+/// Levels of the moment map's mip chain for a W x H grid (down to 1 x 1).
+inline uint32_t aaMomentLevels(uint32_t width, uint32_t height) {
+    uint32_t levels = 1;
+    while ((width >> (levels - 1)) > 1 || (height >> (levels - 1)) > 1) ++levels;
+    return levels;
+}
+
+/// The GPU kernels' parameter block (pure setup): the view, the light (its view_projection must see
+/// every centre and sub-sample), the hard pipeline's exact-test settings, the rotated-grid pattern
+/// (the GPU runs the rotated grid only: a jittered pattern differs per pixel), the light grid
+/// (options.grid_width x grid_height), the list capacity and the limits, the mode of the
+/// sample-buffer and resolve kernels, and the Chebyshev stencil's options.
+inline AaParams aaParams(const SampleListsView& view, const SampleListsLight& light, const AliasFreeHardOptions& options,
+                         const AaPatternOptions& pattern, const ProvableStencilOptions& so, uint32_t list_capacity,
+                         uint32_t mode, const ChebyshevStencilOptions& chebyshev = {}) {
+    checkAaPatternOptions(pattern);
+    PENUMBRA_CHECK(pattern.pattern == AaPattern::RotatedGrid,
+                   "penumbra::aaParams: the GPU stencil runs the rotated-grid pattern only (jittered: the CPU path)");
+    AaParams p{};
+    const glm::dmat4 inverse(view.inverse_view_projection), vp(light.view_projection);
+    for (int c = 0; c < 4; ++c) {
+        p.inverse_view_projection[c] = inverse[c];
+        p.light_view_projection[c] = vp[c];
+    }
+    p.numbers = glm::dvec4(options.coplanar_epsilon, double(options.directional_reach), view.depth_zero_to_one ? 0.0 : -1.0, 0.0);
+    p.light_clip = light.view_projection;
+    p.light = light.light;
+    for (uint32_t k = 0; k < pattern.samples; ++k) {
+        const glm::vec2 o = aaSubSampleOffset(pattern, 0, k);
+        if (k % 2 == 0) {
+            p.offsets[k / 2].x = o.x;
+            p.offsets[k / 2].y = o.y;
+        } else {
+            p.offsets[k / 2].z = o.x;
+            p.offsets[k / 2].w = o.y;
+        }
+    }
+    p.view = glm::uvec4(view.width, view.height, pattern.samples, so.cull_back_facing ? 1u : 0u);
+    p.grid = glm::uvec4(options.grid_width, options.grid_height, list_capacity, mode);
+    p.limits = glm::uvec4(so.max_footprint_texels, so.maxList(pattern.samples), 0u, 0u);
+    const bool perspective = light.light.w != 0.0f;
+    p.chebyshev = glm::vec4(chebyshev.threshold, chebyshev.bias_scale, chebyshev.min_variance, perspective ? 0.0f : 2.0f);
+    p.moments = glm::uvec4(aaMomentLevels(options.grid_width, options.grid_height), chebyshev.inner_shadow_proof ? 1u : 0u,
+                           perspective ? 1u : 0u, 0u);
+    return p;
 }
 
 }  // namespace penumbra

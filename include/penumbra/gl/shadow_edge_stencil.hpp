@@ -38,6 +38,7 @@
 #include "penumbra/gl/shader.hpp"
 #include "penumbra/shadow_edge_stencil.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -52,6 +53,11 @@ struct AaCasterBuffers {
     uint32_t stride = 12;   ///< bytes from one vertex's position to the next (interleaved attributes)
 };
 
+/// Which stencil run() computes: the provable one (default) or galoppo2010's Chebyshev stencil
+/// over a conservative moment map (a probability: it can miss edges; its moments equal
+/// conservativeMomentMapCpu's and its flags chebyshevEdgeStencilCpu's).
+enum class AaStencilKind { Provable, Chebyshev };
+
 class ShadowEdgeStencil {
 public:
     /// options: the hard pipeline's options (grid_width x grid_height = the binning grid, the
@@ -60,9 +66,10 @@ public:
     /// Throws penumbra::Error for bad sizes or options (setup time).
     ShadowEdgeStencil(uint32_t view_width, uint32_t view_height, const AliasFreeHardOptions& options,
                       const AaPatternOptions& pattern = {}, const ProvableStencilOptions& stencil_options = {},
-                      uint32_t list_capacity = 1u << 22, const ShaderLibrary& library = ShaderLibrary::embedded())
+                      uint32_t list_capacity = 1u << 22, const ShaderLibrary& library = ShaderLibrary::embedded(),
+                      AaStencilKind kind = AaStencilKind::Provable, const ChebyshevStencilOptions& chebyshev = {})
         : width_(view_width), height_(view_height), options_(options), pattern_(pattern), stencil_options_(stencil_options),
-          capacity_(list_capacity), scanner_(ScanOptions{}, library) {
+          capacity_(list_capacity), kind_(kind), chebyshev_(chebyshev), scanner_(ScanOptions{}, library) {
         checkAaPatternOptions(pattern);
         PENUMBRA_CHECK(pattern.pattern == AaPattern::RotatedGrid,
                        "ShadowEdgeStencil: the GPU stencil runs the rotated-grid pattern only (jittered: the CPU path)");
@@ -104,6 +111,27 @@ public:
         finish_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/finish.comp.glsl", {}, library);
         buffer_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/sample_buffer.comp.glsl", {}, library);
         resolve_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/resolve.comp.glsl", {}, library);
+        if (kind == AaStencilKind::Chebyshev) {
+            PENUMBRA_CHECK(chebyshev.threshold > 0.0f && chebyshev.threshold < 1.0f && chebyshev.bias_scale >= 0.0f &&
+                               chebyshev.min_variance > 0.0f,
+                           "ShadowEdgeStencil: Chebyshev threshold ", chebyshev.threshold, " must be in (0, 1), bias_scale ",
+                           chebyshev.bias_scale, " >= 0, min_variance ", chebyshev.min_variance, " > 0");
+            levels_ = aaMomentLevels(options.grid_width, options.grid_height);
+            uint64_t level_texels = 0;
+            for (uint32_t l = 0; l < levels_; ++l)
+                level_texels += uint64_t(std::max(1u, options.grid_width >> l)) * std::max(1u, options.grid_height >> l);
+            min_depth_ = Buffer(4 * texels);
+            min_cover_ = Buffer(4 * texels);
+            moments_ = Buffer(8 * level_texels);
+            covers_ = Buffer(4 * level_texels);
+            moments_raster_ = buildProgram({"penumbra/shadow_edge_stencil/moments.vert.glsl",
+                                            "penumbra/shadow_edge_stencil/moments.geom.glsl",
+                                            "penumbra/shadow_edge_stencil/moments.frag.glsl"},
+                                           conservative_.defines, library);
+            moments_level_[0] = buildComputeProgram("penumbra/shadow_edge_stencil/moments_level.comp.glsl", {{"PENUMBRA_AA_PASS", "0"}}, library);
+            moments_level_[1] = buildComputeProgram("penumbra/shadow_edge_stencil/moments_level.comp.glsl", {{"PENUMBRA_AA_PASS", "1"}}, library);
+            chebyshev_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/chebyshev.comp.glsl", {}, library);
+        }
 
         glCreateVertexArrays(1, &vao_);
         glEnableVertexArrayAttrib(vao_, 0);
@@ -141,7 +169,7 @@ public:
         if (!(light.light.w == 0.0f || light.light.w == 1.0f)) return Status::InvalidArgument;
         centres_ = centres;
         normals_ = normals;
-        params_staging_ = aaParams(view, light, options_, pattern_, stencil_options_, capacity_, PENUMBRA_AA_MODE_EDGE);
+        params_staging_ = aaParams(view, light, options_, pattern_, stencil_options_, capacity_, PENUMBRA_AA_MODE_EDGE, chebyshev_);
         glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
         const uint32_t zero = 0;
         glClearNamedBufferData(counts_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
@@ -153,6 +181,11 @@ public:
         bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
         dispatch(footprints_program_, pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        if (kind_ == AaStencilKind::Chebyshev) {
+            runChebyshev(casters);
+            ran_ = true;
+            return Status::Ok;
+        }
         // (2) boxes and counts, (3) scan, (4) scatter.
         bindStencilPass();
         dispatch(setup_program_[0], pixels_);
@@ -164,22 +197,7 @@ public:
         dispatch(setup_program_[1], pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         // (5) the footprint light pass.
-        if (casters.index_count > 0) {
-            glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
-            glVertexArrayVertexBuffer(vao_, 0, casters.positions.buffer, static_cast<GLintptr>(casters.positions.offset),
-                                      static_cast<GLsizei>(casters.stride));
-            glVertexArrayElementBuffer(vao_, casters.indices.buffer);
-            glBindVertexArray(vao_);
-            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
-            glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
-            glDisable(GL_DEPTH_TEST);
-            glDisable(GL_CULL_FACE);
-            glDisable(GL_RASTERIZER_DISCARD);
-            glUseProgram(classify_program_.id());
-            glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT,
-                           reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset)));
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
+        drawCasters(classify_program_, casters);
         // (6) final bits.
         dispatch(finish_program_, pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -230,6 +248,10 @@ public:
     /// Read-backs (they wait for the GPU): for tests and tools, not for the frame.
     std::vector<uint32_t> readStencil() const { return stencil_.download<uint32_t>(); }
     std::vector<glm::vec4> readSubSamples() const { return sub_samples_.download<glm::vec4>(); }
+    /// The Chebyshev kind's moment map, every level one after another (E(x), E(x^2)) and the
+    /// inner-coverage values (the layout of MomentMapCpu::levels / cover, concatenated).
+    std::vector<glm::vec2> readMoments() const { return moments_.download<glm::vec2>(); }
+    std::vector<float> readCovers() const { return covers_.download<float>(); }
     std::array<uint32_t, PENUMBRA_AA_STATUS_WORDS> readStatus() const {
         const std::vector<uint32_t> s = status_.download<uint32_t>();
         std::array<uint32_t, PENUMBRA_AA_STATUS_WORDS> out{};
@@ -238,6 +260,46 @@ public:
     }
 
 private:
+    void drawCasters(const Program& program, const AaCasterBuffers& casters) {
+        if (casters.index_count == 0) return;
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
+        glVertexArrayVertexBuffer(vao_, 0, casters.positions.buffer, static_cast<GLintptr>(casters.positions.offset),
+                                  static_cast<GLsizei>(casters.stride));
+        glVertexArrayElementBuffer(vao_, casters.indices.buffer);
+        glBindVertexArray(vao_);
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
+        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_RASTERIZER_DISCARD);
+        glUseProgram(program.id());
+        glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset)));
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    // galoppo2010 steps 1-3: the conservative moment map (raster with atomicMin, level 0, mips),
+    // then the Chebyshev test per pixel.
+    void runChebyshev(const AaCasterBuffers& casters) {
+        // Empty texels: d_far (0 for a perspective light's -1/w, 2 beyond z_ndc); no cover (+inf).
+        const uint32_t empty_depth = params_staging_.moments.z ? 0x80000000u : 0xC0000000u, no_cover = 0xFF800000u;
+        glClearNamedBufferData(min_depth_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_depth);
+        glClearNamedBufferData(min_cover_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &no_cover);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_DEPTH, min_depth_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_COVER, min_cover_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MOMENTS, moments_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COVERS, covers_.id());
+        drawCasters(moments_raster_, casters);
+        dispatch(moments_level_[0], uint64_t(options_.grid_width) * options_.grid_height);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        for (uint32_t l = 1; l < levels_; ++l) {
+            params_staging_.moments.w = l;
+            glNamedBufferSubData(params_.id(), offsetof(AaParams, moments), sizeof(glm::uvec4), &params_staging_.moments);
+            dispatch(moments_level_[1], uint64_t(std::max(1u, options_.grid_width >> l)) * std::max(1u, options_.grid_height >> l));
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        dispatch(chebyshev_program_, pixels_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
     void setMode(AaMode mode) {
         params_staging_.grid.w = mode == AaMode::Off ? PENUMBRA_AA_MODE_OFF : mode == AaMode::Edge ? PENUMBRA_AA_MODE_EDGE : PENUMBRA_AA_MODE_FULL;
         glNamedBufferSubData(params_.id(), offsetof(AaParams, grid), sizeof(glm::uvec4), &params_staging_.grid);
@@ -271,13 +333,18 @@ private:
     AaPatternOptions pattern_;
     ProvableStencilOptions stencil_options_;
     uint32_t capacity_ = 0;
+    AaStencilKind kind_ = AaStencilKind::Provable;
+    ChebyshevStencilOptions chebyshev_;
+    uint32_t levels_ = 0;
     ConservativeRasterSetup conservative_;
     Scanner scanner_;
     AaParams params_staging_{};
     BufferRange centres_{}, normals_{};
     bool ran_ = false;
     Buffer sub_samples_, stencil_, footprints_, counts_, cursor_, list_, status_, params_, conservative_ubo_;
+    Buffer min_depth_, min_cover_, moments_, covers_;
     Program footprints_program_, setup_program_[2], classify_program_, finish_program_, buffer_program_, resolve_program_;
+    Program moments_raster_, moments_level_[2], chebyshev_program_;
     GLuint vao_ = 0, fbo_ = 0;
 };
 

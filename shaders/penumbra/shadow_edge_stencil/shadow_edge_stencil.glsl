@@ -202,4 +202,152 @@ vec2 penumbraAaOffset(vec4 offsets[PENUMBRA_AA_MAX_SAMPLES / 2], uint k) {
     return (k & 1u) == 0u ? pair.xy : pair.zw;
 }
 
+// ---- The Chebyshev stencil's moment map (detail::aaDepthTriangle, aaDepthTexel, aaLightDepth).
+
+double penumbraAaLightDepth(dvec4 c, bool perspective) {
+    precise double d = perspective ? -1.0lf / c.w : c.z / c.w;
+    return d;
+}
+
+// Float depths as uints that order like the floats (atomicMin on the bits).
+uint penumbraAaOrderedBits(float f) {
+    uint u = floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+float penumbraAaFromOrderedBits(uint e) {
+    return uintBitsToFloat((e & 0x80000000u) != 0u ? (e & 0x7fffffffu) : ~e);
+}
+
+struct PenumbraAaDepthTriangle {
+    dvec3 s[4];
+    int count;
+    double ga, gb, g0, dmin, dmax, orientation;
+    dvec2 lo, hi;
+};
+
+bool penumbraAaDepthTriangle(dvec4 m0, dvec4 m1, dvec4 m2, dvec4 m3, dvec3 p0, dvec3 p1, dvec3 p2, uint width, uint height,
+                             bool perspective, out PenumbraAaDepthTriangle t) {
+    dvec4 h[3] = dvec4[3](penumbraAaTransform(m0, m1, m2, m3, dvec4(p0, 1.0lf)), penumbraAaTransform(m0, m1, m2, m3, dvec4(p1, 1.0lf)),
+                          penumbraAaTransform(m0, m1, m2, m3, dvec4(p2, 1.0lf)));
+    t.count = 0;
+    for (int k = 0; k < 4; ++k) t.s[k] = dvec3(0.0lf);
+    t.ga = 0.0lf;
+    t.gb = 0.0lf;
+    t.g0 = 0.0lf;
+    t.dmin = 0.0lf;
+    t.dmax = 0.0lf;
+    t.orientation = 1.0lf;
+    t.lo = dvec2(0.0lf);
+    t.hi = dvec2(0.0lf);
+    double w_max = max(h[0].w, max(h[1].w, h[2].w));
+    if (!(w_max > 0.0lf)) return false;
+    precise double w_scaled = 1e-4lf * w_max;
+    double w_min = perspective ? w_scaled : -1e300lf;
+    for (int k = 0; k < 3; ++k) {
+        dvec4 a = h[k], b = h[(k + 1) % 3];
+        if (a.w >= w_min) {
+            t.s[t.count] = dvec3(penumbraAaGrid(a.x, a.w, width), penumbraAaGrid(a.y, a.w, height), penumbraAaLightDepth(a, perspective));
+            ++t.count;
+        }
+        if ((a.w >= w_min) != (b.w >= w_min)) {
+            precise double f = (w_min - a.w) / (b.w - a.w);
+            precise dvec4 c = dvec4(a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f);
+            t.s[t.count] = dvec3(penumbraAaGrid(c.x, c.w, width), penumbraAaGrid(c.y, c.w, height), penumbraAaLightDepth(c, perspective));
+            ++t.count;
+        }
+    }
+    if (t.count < 3) return false;
+    t.dmin = 1e300lf;
+    t.dmax = -1e300lf;
+    t.lo = dvec2(1e300lf);
+    t.hi = dvec2(-1e300lf);
+    double area = 0.0lf;
+    for (int j = 0; j < t.count; ++j) {
+        dvec3 q = t.s[(j + 1) % t.count];
+        t.dmin = min(t.dmin, t.s[j].z);
+        t.dmax = max(t.dmax, t.s[j].z);
+        t.lo = min(t.lo, t.s[j].xy);
+        t.hi = max(t.hi, t.s[j].xy);
+        precise double term = t.s[j].x * q.y - q.x * t.s[j].y;
+        precise double next = area + term;
+        area = next;
+    }
+    t.orientation = area > 0.0lf ? 1.0lf : -1.0lf;
+    double best = 0.0lf;
+    t.g0 = t.dmin;
+    for (int j = 1; j + 1 < t.count; ++j) {
+        precise dvec3 e1 = t.s[j] - t.s[0];
+        precise dvec3 e2 = t.s[j + 1] - t.s[0];
+        precise double det = e1.x * e2.y - e1.y * e2.x;
+        if (abs(det) > best) {
+            best = abs(det);
+            precise double ga = (e1.z * e2.y - e2.z * e1.y) / det;
+            precise double gb = (e2.z * e1.x - e1.z * e2.x) / det;
+            precise double g0 = (t.s[0].z - ga * t.s[0].x) - gb * t.s[0].y;
+            t.ga = ga;
+            t.gb = gb;
+            t.g0 = g0;
+        }
+    }
+    return true;
+}
+
+bool penumbraAaDepthTexel(PenumbraAaDepthTriangle t, int x, int y, out double d, out double c) {
+    const double margin = 1.0lf / 1024.0lf;
+    d = 0.0lf;
+    c = 0.0lf;
+    double x0 = double(x), y0 = double(y), x1 = double(x) + 1.0lf, y1 = double(y) + 1.0lf;
+    precise double xl = x0 + margin;
+    precise double xh = x1 - margin;
+    precise double yl = y0 + margin;
+    precise double yh = y1 - margin;
+    if (!(t.hi.x > xl && t.lo.x < xh && t.hi.y > yl && t.lo.y < yh)) return false;
+    for (int j = 0; j < t.count; ++j) {
+        dvec3 a = t.s[j], b = t.s[(j + 1) % t.count];
+        precise double nx = b.y - a.y;
+        precise double ny = a.x - b.x;
+        double poly_lo = 1e300lf, poly_hi = -1e300lf;
+        for (int k = 0; k < t.count; ++k) {
+            precise double v = nx * t.s[k].x + ny * t.s[k].y;
+            poly_lo = min(poly_lo, v);
+            poly_hi = max(poly_hi, v);
+        }
+        precise double bx0 = nx * x0;
+        precise double bx1 = nx * x1;
+        precise double by0 = ny * y0;
+        precise double by1 = ny * y1;
+        precise double box_lo = min(bx0, bx1) + min(by0, by1);
+        precise double box_hi = max(bx0, bx1) + max(by0, by1);
+        precise double slack = margin * (abs(nx) + abs(ny));
+        precise double lo_bound = box_lo + slack;
+        precise double hi_bound = box_hi - slack;
+        if (!(poly_hi > lo_bound && poly_lo < hi_bound)) return false;
+    }
+    precise double ax0 = t.ga * x0;
+    precise double ax1 = t.ga * x1;
+    precise double ay0 = t.gb * y0;
+    precise double ay1 = t.gb * y1;
+    precise double corner = (t.g0 + min(ax0, ax1)) + min(ay0, ay1);
+    double dd = max(corner, t.dmin);
+    precise double dm = dd - 1e-6lf * ((abs(dd) + abs(t.ga)) + abs(t.gb));
+    d = dm;
+    c = double(uintBitsToFloat(0x7f800000u));  // +inf: no cover
+    for (int k = 0; k < 4; ++k) {
+        double cx = (k & 1) != 0 ? x1 : x0, cy = (k >> 1) != 0 ? y1 : y0;
+        for (int j = 0; j < t.count; ++j) {
+            dvec3 a = t.s[j], b = t.s[(j + 1) % t.count];
+            precise double e = (b.x - a.x) * (cy - a.y) - (b.y - a.y) * (cx - a.x);
+            precise double scale = ((abs(b.x - a.x) + abs(b.y - a.y)) + abs(cx - a.x)) + abs(cy - a.y);
+            precise double lhs = e * t.orientation;
+            precise double rhs = (1e-9lf * scale) * scale;
+            if (!(lhs > rhs)) return true;
+        }
+    }
+    precise double far_corner = (t.g0 + max(ax0, ax1)) + max(ay0, ay1);
+    double cc = min(far_corner, t.dmax);
+    precise double cm = cc + 1e-6lf * ((abs(cc) + abs(t.ga)) + abs(t.gb));
+    c = cm;
+    return true;
+}
+
 #endif

@@ -35,6 +35,11 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_BINDING_OUT_NORMALS 5    // sample-buffer kernel: vec4 [P * (1 + N)]
 #define PENUMBRA_AA_BINDING_STATES 4         // resolve kernel: uint states of the hard pipeline
 #define PENUMBRA_AA_BINDING_VISIBLE 5        // resolve kernel: float [P]
+// The Chebyshev stencil's moment map (moments.* and chebyshev.comp.glsl):
+#define PENUMBRA_AA_BINDING_MIN_DEPTH 4      // uint [W * H]: ordered bits of the least float depth (atomicMin)
+#define PENUMBRA_AA_BINDING_MIN_COVER 5      // uint [W * H]: ordered bits of the least cover value
+#define PENUMBRA_AA_BINDING_MOMENTS 6        // vec2 per texel, every level one after another (E(x), E(x^2))
+#define PENUMBRA_AA_BINDING_COVERS 7         // float per texel, every level (inner coverage)
 
 // Status words (statusWords(): a read-back for tests and tools).
 #define PENUMBRA_AA_STATUS_LIST_ENTRIES 0   // footprint-texel entries the setup counted
@@ -54,7 +59,7 @@ struct PenumbraAaFootprint {
     ivec4 pad;
 };
 
-/// The constants of every shadow-edge-stencil kernel (std140 == std430, 928 bytes).
+/// The constants of every shadow-edge-stencil kernel (std140 == std430, 960 bytes).
 struct PenumbraAaParams {
     dvec4 inverse_view_projection[4];  // view clip -> world, columns (double of the engine's float matrix)
     dvec4 light_view_projection[4];    // world -> light clip, columns (double of the float matrix): binning
@@ -65,6 +70,8 @@ struct PenumbraAaParams {
     uvec4 view;                        // x: width, y: height, z: N, w: 1 = cull light-back-facing samples
     uvec4 grid;                        // x: light grid W, y: H, z: list capacity, w: mode (PENUMBRA_AA_MODE_*)
     uvec4 limits;                      // x: max footprint texels, y: max list length per texel, z, w: 0
+    vec4 chebyshev;                    // x: threshold, y: bias_scale, z: min_variance, w: d_far (empty texels)
+    uvec4 moments;                     // x: levels, y: 1 = inner_shadow_proof, z: 1 = perspective light, w: the level a mip pass writes
 };
 
 #ifdef __cplusplus
