@@ -6,6 +6,7 @@
 //                [--mode reference|soft|hard|hpc|dsm] [--reference] [--out FILE.png] [--json] [--no-ground]
 //                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--rotations R] [--grid G]
 //                [--opacity A] [--dsm-res R] [--dsm-samples S] [--tolerance E]
+//                [--aa off|edge|full] [--aa-samples 4|8|16] [--aa-stencil provable|chebyshev]
 //
 // Modes
 //   reference (default): every view sample's visibility of N light samples from the exact
@@ -27,6 +28,16 @@
 //       sintorn2008 §3) from the light's centre, on a headless GL context (PENUMBRA_GL=egl|osmesa);
 //       --reference adds the oracle's verdict for the same samples and light point to the JSON
 //       (mismatched, ties, samples).
+//       --aa edge|full: eye-view anti-aliasing (penumbra/gl/shadow_edge_stencil.hpp, galoppo2010):
+//       N (--aa-samples, 4) rotated-grid sub-samples on each pixel's plane, tested by the same
+//       pipeline where the shadow-edge stencil (--aa-stencil: provable, or galoppo2010's Chebyshev
+//       test over a conservative moment map) flags the pixel (edge) or everywhere (full), resolved
+//       to a lit fraction per pixel. Off, edge and full all run; the image is --aa's, and
+//       <out>_aa_compare.png (off | edge | full) and <out>_aa_stencil.png (flagged pixels red,
+//       with --reference missed edge pixels green) are written beside it. --reference: the oracle
+//       on every centre and sub-sample the GPU tested (JSON reference.missed_edge_pixels: pixels
+//       whose points disagree that the stencil left single-sampled, for both stencils) and on 64
+//       points per pixel (reference.rmse of --aa's mode, aa.rmse of off / edge / full).
 //   dsm: deep shadow maps (penumbra/deep_shadow_map.hpp, lokovic2000) of semi-transparent casters:
 //       every mesh but the ground casts with opacity --opacity (A, default 0.5), every mesh
 //       receives. The light is the scene's light as a point: a perspective view from its centre
@@ -62,6 +73,7 @@
 #include <penumbra/gl/light_lut.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
+#include <penumbra/gl/shadow_edge_stencil.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/penumbra_casting.hpp>
 #include <penumbra/reference/compare.hpp>
@@ -135,6 +147,9 @@ struct Args {
     uint32_t dsm_samples = 16;           // dsm mode: S jittered sub-samples per texel
     double tolerance = 0.0;              // dsm mode: compression tolerance (L-infinity); 0 = 1 / (2 S)
     std::string dsm_build = "gpu";       // dsm mode: gpu (penumbra/gl/deep_shadow_map.hpp) or cpu (its twin)
+    std::string aa = "off";              // hard mode: eye-view anti-aliasing (galoppo2010): off | edge | full
+    uint32_t aa_samples = 4;             // ... N sub-samples per multi-sampled pixel: 4 | 8 | 16 (rotated grid)
+    std::string aa_stencil = "provable"; // ... which stencil picks the pixels of --aa edge: provable | chebyshev
     bool skip(const char* name) const { return std::find(skip_list.begin(), skip_list.end(), name) != skip_list.end(); }
 };
 
@@ -157,6 +172,7 @@ struct RawArgs {
     std::string frames = "1", frames_reference = "4096";
     std::string lut_res = "64", sets = "4", grid = "256", rotations = "8";
     std::string opacity = "0.5", dsm_res = "256", dsm_samples = "16", tolerance = "0";
+    std::string aa_samples = "4";
     bool no_ground = false;
 };
 
@@ -187,6 +203,7 @@ struct ModeFlag {
 // uses neither the light samples nor the radius. --mode dsm sees the light as a point too.
 const char* const kDsmPointLight = "a deep shadow map sees the light as a point, its centre";
 const char* const kDsmOnly = "only --mode dsm builds a deep shadow map of semi-transparent casters";
+const char* const kAaOnly = "only --mode hard anti-aliases its shadows with extra sub-samples per pixel";
 const ModeFlag kModeFlags[] = {
     {"--samples", true, false, true, true, false, "hard shadows use one light point, the light's centre",
      "a deep shadow map takes its sub-samples per texel from --dsm-samples"},
@@ -211,6 +228,9 @@ const ModeFlag kModeFlags[] = {
     {"--dsm-samples", false, false, false, false, true, kDsmOnly},
     {"--tolerance", false, false, false, false, true, kDsmOnly},
     {"--dsm-build", false, false, false, false, true, kDsmOnly},
+    {"--aa", false, true, false, false, false, kAaOnly},
+    {"--aa-samples", false, true, false, false, false, kAaOnly},
+    {"--aa-stencil", false, true, false, false, false, kAaOnly},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -320,6 +340,18 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_option("--tolerance", raw.tolerance,
                    "dsm mode: compression tolerance of the visibility functions (L-infinity), in [2^-12, 1]; 0 = 1 / (2 S)")
         ->type_name("E")
+        ->capture_default_str();
+    app.add_option("--aa", a.aa,
+                   "hard mode: eye-view anti-aliasing (galoppo2010): off (one sample per pixel), edge (sub-samples where the "
+                   "shadow-edge stencil flags a pixel), full (sub-samples in every pixel)")
+        ->check(CLI::IsMember({"off", "edge", "full"}))
+        ->capture_default_str();
+    app.add_option("--aa-samples", raw.aa_samples, "hard mode --aa edge|full: N sub-samples per pixel, 4, 8 or 16 (rotated grid)")
+        ->type_name("N")
+        ->capture_default_str();
+    app.add_option("--aa-stencil", a.aa_stencil,
+                   "hard mode --aa edge: provable (edge == full bit for bit) or chebyshev (galoppo2010's variance test: can miss edges)")
+        ->check(CLI::IsMember({"provable", "chebyshev"}))
         ->capture_default_str();
     app.add_flag("--json", a.json, "print a one-line JSON report on stdout");
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
@@ -458,6 +490,13 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
             usageError("--opacity must be in [0, 1] (the fraction of light a caster stops), got '", raw.opacity, "'");
         a.opacity = v;
     }
+    if (a.aa != "off" && a.check_skips)
+        usageError("--check-skips is not used with --aa ", a.aa, " (the anti-aliased frames run with the skips as given)");
+    a.aa_samples = parseWhole(raw.aa_samples, "--aa-samples");
+    if (a.aa_samples != 4 && a.aa_samples != 8 && a.aa_samples != 16)
+        usageError("--aa-samples must be 4, 8 or 16, got '", raw.aa_samples, "'");
+    if (a.aa == "off" && (app.count("--aa-samples") > 0 || app.count("--aa-stencil") > 0))
+        usageError(app.count("--aa-samples") > 0 ? "--aa-samples" : "--aa-stencil", " needs --aa edge or --aa full");
     a.dsm_res = parseWhole(raw.dsm_res, "--dsm-res");
     a.dsm_samples = parseWhole(raw.dsm_samples, "--dsm-samples");
     a.tolerance = parseNumber(raw.tolerance, "--tolerance");
@@ -547,6 +586,15 @@ MemoryEstimate estimateMemory(const Args& args, size_t triangles) {
         m.parts.emplace_back("G-buffer and view samples", 2.0 * 100.0 * pixels + 52.0 * pixels);
         m.parts.emplace_back("sample lists", 2.0 * 40.0 * pixels);
         if (args.reference) m.parts.emplace_back("oracle check", (24.0 + 4.0 + 8.0) * pixels);
+        if (args.aa != "off") {
+            // --aa: sub-samples, stencil records (~ 64 B per pixel) and per point of the sample
+            // buffer (1 + N per pixel) two vec4, the lists' ~ 40 B, its state, counted twice;
+            // --reference: the full buffer read back and the oracle's verdict per point, and 64
+            // dense points per pixel (vec4 and verdict, twice for the footprint copy).
+            const double points = (1.0 + args.aa_samples) * pixels;
+            m.parts.emplace_back("anti-aliasing sample buffer", 2.0 * (64.0 * pixels + (32.0 + 40.0 + 4.0) * points));
+            if (args.reference) m.parts.emplace_back("anti-aliasing oracle", (17.0 + 4.0) * points + 2.0 * 17.0 * 64.0 * pixels);
+        }
     } else if (args.mode == "soft") {
         // As hard, plus the masks (N bits per sample, GPU + read-back) and the LUT (K sets x
         // ceil(N / 128) tables x R^3 uvec4 texels, twice for the certified masks), counted twice
@@ -779,18 +827,24 @@ std::string siblingPath(const std::string& out, const char* suffix) {
 /// <out stem>_shading.png beside `out`.
 std::string shadingComparePath(const std::string& out) { return siblingPath(out, "_shading"); }
 
+/// Side by side, left to right (same sizes).
+penumbra::scene::ImageRgb8 sideBySide(const std::vector<const penumbra::scene::ImageRgb8*>& parts) {
+    penumbra::scene::ImageRgb8 out;
+    out.width = parts[0]->width * static_cast<uint32_t>(parts.size());
+    out.height = parts[0]->height;
+    out.pixels.resize(size_t(out.width) * out.height * 3);
+    for (size_t k = 0; k < parts.size(); ++k) {
+        const penumbra::scene::ImageRgb8& part = *parts[k];
+        for (uint32_t y = 0; y < part.height; ++y)
+            std::memcpy(&out.pixels[(size_t(y) * out.width + k * part.width) * 3], &part.pixels[size_t(y) * part.width * 3],
+                        size_t(part.width) * 3);
+    }
+    return out;
+}
+
 /// Writes the Phong | bent image pair side by side.
 void writeShadingCompare(const std::string& out, const penumbra::scene::ImageRgb8& phong, const penumbra::scene::ImageRgb8& bent) {
-    penumbra::scene::ImageRgb8 pair;
-    pair.width = phong.width * 2;
-    pair.height = phong.height;
-    pair.pixels.resize(size_t(pair.width) * pair.height * 3);
-    for (uint32_t y = 0; y < phong.height; ++y) {
-        std::memcpy(&pair.pixels[size_t(y) * pair.width * 3], &phong.pixels[size_t(y) * phong.width * 3], phong.width * 3);
-        std::memcpy(&pair.pixels[(size_t(y) * pair.width + phong.width) * 3], &bent.pixels[size_t(y) * bent.width * 3],
-                    bent.width * 3);
-    }
-    penumbra::scene::writePng(shadingComparePath(out), pair);
+    penumbra::scene::writePng(shadingComparePath(out), sideBySide({&phong, &bent}));
 }
 
 /// Coplanar tolerance of the exact test for depth-reconstructed view samples: above the ~1e-5
@@ -899,6 +953,354 @@ double timedFrame(const Run& run, const char* pipeline) {
     return -1;
 }
 
+// --mode hard --aa edge|full: eye-view anti-aliasing of the hard shadows (galoppo2010,
+// penumbra/gl/shadow_edge_stencil.hpp) on the G-buffer's view samples and face normals. Off, edge
+// and full all run (one warm-up, one timed frame each), so the report compares them; the image is
+// --aa's. Per frame: the stencil (--aa-stencil), the extended sample buffer (centres, plus N
+// sub-samples of the flagged pixels for edge or of every pixel for full), the hard pipeline on it
+// and the resolve to a lit fraction per pixel.
+
+/// The oracle's verdicts on `ids` (hardReference: the very floats the GPU tested), in chunks with
+/// progress on stderr. Only ids, blocked and tie are filled.
+penumbra::reference::HardReference hardReferenceWithProgress(const penumbra::reference::VisibilityOracle& oracle,
+                                                             const std::vector<glm::vec4>& positions,
+                                                             const std::vector<uint32_t>& ids,
+                                                             const penumbra::reference::HardLight& light,
+                                                             const penumbra::reference::VisibilityOptions& options,
+                                                             const char* what) {
+    penumbra::reference::HardReference all;
+    all.ids = ids;
+    all.blocked.reserve(ids.size());
+    all.tie.reserve(ids.size());
+    Progress progress(what, ids.size());
+    std::vector<uint32_t> part;
+    inChunks(ids.size(), 4096, progress, [&](size_t begin, size_t end) {
+        part.assign(ids.begin() + static_cast<std::ptrdiff_t>(begin), ids.begin() + static_cast<std::ptrdiff_t>(end));
+        const penumbra::reference::HardReference r = penumbra::reference::hardReference(oracle, positions, part, light, options);
+        all.blocked.insert(all.blocked.end(), r.blocked.begin(), r.blocked.end());
+        all.tie.insert(all.tie.end(), r.tie.begin(), r.tie.end());
+    });
+    return all;
+}
+
+/// Per point of `positions` (w == 0: none): lit (1), shadowed (0) or none / tie (2), from the
+/// oracle. A point whose pixel plane faces away from the light is shadowed (aaBackFacing, the
+/// pipeline's own rule: the oracle sees segments, not normals); pixel(i) names point i's pixel
+/// (its normal is normals[pixel(i)]).
+template <typename PixelOf>
+std::vector<uint8_t> oracleLit(const penumbra::reference::VisibilityOracle& oracle, const std::vector<glm::vec4>& positions,
+                               const std::vector<glm::vec4>& normals, PixelOf pixel, const glm::vec4& light,
+                               const penumbra::reference::VisibilityOptions& options, const char* what) {
+    std::vector<uint8_t> lit(positions.size(), 2);
+    std::vector<uint32_t> ids;
+    for (size_t i = 0; i < positions.size(); ++i) {
+        if (positions[i].w == 0.0f) continue;
+        if (penumbra::detail::aaBackFacing(light, positions[i], glm::vec3(normals[pixel(i)]))) lit[i] = 0;
+        else ids.push_back(static_cast<uint32_t>(i));
+    }
+    const penumbra::reference::HardReference r =
+        hardReferenceWithProgress(oracle, positions, ids, penumbra::reference::hardLight(light), options, what);
+    for (size_t k = 0; k < ids.size(); ++k) lit[ids[k]] = r.tie[k] ? 2 : r.blocked[k] ? 0 : 1;
+    return lit;
+}
+
+/// The stencil over the shaded image: grey image, flagged pixels red, `missed` pixels (edge
+/// pixels the stencil left single-sampled) green. Rows flipped as the shaded images.
+void writeStencilPng(const std::string& path, const penumbra::scene::ImageRgb8& shaded, const GpuViewSamples& v,
+                     const std::vector<uint32_t>& words, const std::vector<uint8_t>& missed) {
+    penumbra::scene::ImageRgb8 image = shaded;
+    const uint32_t w = v.view.width, h = v.view.height;
+    for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * w + x;
+            uint8_t* c = &image.pixels[(size_t(h - 1 - y) * w + x) * 3];
+            const uint8_t grey = static_cast<uint8_t>((int(c[0]) + int(c[1]) + int(c[2])) / 6);
+            c[0] = c[1] = c[2] = grey;
+            if (!v.surface(i)) continue;
+            if (!missed.empty() && missed[i]) {
+                c[0] = 40, c[1] = 255, c[2] = 60;
+            } else if (words[i] & PENUMBRA_AA_FLAG) {
+                c[0] = 255, c[1] = static_cast<uint8_t>(grey / 2 + 30), c[2] = static_cast<uint8_t>(grey / 2);
+            }
+        }
+    }
+    penumbra::scene::writePng(path, image);
+}
+
+int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& oracle, const MergedScene& merged,
+              const glm::dvec3& light_pos, const penumbra::scene::GpuScene& gpu, const GpuViewSamples& v,
+              const std::string& renderer, double load_ms, std::chrono::steady_clock::time_point t_start) {
+    using penumbra::AaMode;
+    using penumbra::Status;
+    using penumbra::gl::Buffer;
+    using penumbra::gl::ShadowEdgeStencil;
+    const uint32_t w = args.width, h = args.height, p = w * h, n = args.aa_samples;
+    const uint32_t all = p * (1 + n);  // checkMemory bounds the image: p (1 + 16) < 2^31
+    penumbra::AliasFreeHardOptions options;
+    options.grid_width = w;
+    options.grid_height = h;
+    options.count_work = true;
+    if (v.depth_input) options.coplanar_epsilon = kDepthCoplanarEpsilon;
+    // --skips: the hard pipeline's skips but cull (light_facing_only): the stencil classifies every caster.
+    options.fit_frustum = args.skip("fit");
+    options.skip_shadowed = args.skip("shadowed");
+    options.clip_to_box = args.skip("box");
+    penumbra::AaPatternOptions pattern;
+    pattern.samples = n;
+    auto range = [](const Buffer& b) { return penumbra::BufferRange{b.id(), 0, b.size()}; };
+    const Buffer centres = Buffer::fromVector(v.positions);
+    const penumbra::BufferRange normals{v.gbuffer.faceBuffer().id(), 0, v.gbuffer.faceBuffer().size()};
+    penumbra::gl::AaCasterBuffers casters;
+    casters.positions = {gpu.vertexBuffer(), 0, 24ull * gpu.positions().size()};
+    casters.indices = {gpu.indexBuffer(), 0, 4ull * gpu.indexCount()};
+    casters.index_count = gpu.indexCount();
+    casters.stride = 24;
+
+    // [0] provable, [1] Chebyshev: the one --aa-stencil names; with --reference both (each one's misses).
+    const int main_kind = args.aa_stencil == "chebyshev" ? 1 : 0;
+    std::unique_ptr<ShadowEdgeStencil> stencils[2];
+    for (int k = 0; k < 2; ++k) {
+        if (!args.reference && k != main_kind) continue;
+        stencils[k] = std::make_unique<ShadowEdgeStencil>(
+            w, h, options, pattern, penumbra::ProvableStencilOptions{}, 1u << 22, penumbra::ShaderLibrary::embedded(),
+            k == 1 ? penumbra::gl::AaStencilKind::Chebyshev : penumbra::gl::AaStencilKind::Provable);
+    }
+    ShadowEdgeStencil& stencil = *stencils[main_kind];
+
+    // The light's frustum must see every sub-sample too: one run for them, then the box of all points.
+    penumbra::SampleListsLight light;
+    light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
+    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, v.lo, v.hi);
+    if (stencil.run(range(centres), normals, v.view, light, casters) != Status::Ok) {
+        std::fprintf(stderr, "soft_shadows: the shadow-edge stencil rejected its inputs\n");
+        return 1;
+    }
+    {
+        glm::vec3 lo = v.lo, hi = v.hi;
+        for (const glm::vec4& s : stencil.readSubSamples()) {
+            if (s.w == 0.0f) continue;
+            lo = glm::min(lo, glm::vec3(s));
+            hi = glm::max(hi, glm::vec3(s));
+        }
+        light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
+    }
+
+    penumbra::AliasFreeHardShadows hard(options);
+    hard.reserve(all);
+    auto draw = [&](penumbra::CasterClass cls) { gpu.drawClass(cls == penumbra::CasterClass::Closed); };
+    Buffer sample_pos(stencil.sampleBufferBytes()), sample_nrm(stencil.sampleBufferBytes());
+    Buffer visible[4] = {Buffer(4ull * p), Buffer(4ull * p), Buffer(4ull * p), Buffer(4ull * p)};  // off, edge, full, other edge
+    const penumbra::BufferRange states{hard.stateBuffer().id(), 0, 4ull * all};
+    auto runOff = [&] {
+        const Status s = hard.run(penumbra::SampleBufferInput{range(centres), normals}, p, light, draw);
+        return s == Status::Ok ? stencil.resolve(AaMode::Off, {states.buffer, 0, 4ull * p}, range(visible[0])) : s;
+    };
+    auto runSamples = [&](ShadowEdgeStencil& st, AaMode mode, const Buffer& out) {
+        Status s = st.writeSampleBuffer(mode, range(sample_pos), range(sample_nrm));
+        if (s == Status::Ok) s = hard.run(penumbra::SampleBufferInput{range(sample_pos), range(sample_nrm)}, all, light, draw);
+        return s == Status::Ok ? st.resolve(mode, states, range(out)) : s;
+    };
+    auto runStencil = [&](ShadowEdgeStencil& st) { return [&] { return st.run(range(centres), normals, v.view, light, casters); }; };
+
+    const double off_ms = timedFrame(runOff, "hard-shadow (--aa off)");
+    if (off_ms < 0) return 1;
+    const std::vector<float> vis_off = visible[0].download<float>();
+    const double stencil_ms = timedFrame(runStencil(stencil), "shadow-edge stencil");
+    if (stencil_ms < 0) return 1;
+    const std::vector<uint32_t> words = stencil.readStencil();
+    const auto stencil_status = stencil.readStatus();
+    const double edge_ms = timedFrame([&] { return runSamples(stencil, AaMode::Edge, visible[1]); }, "hard-shadow (--aa edge)");
+    if (edge_ms < 0) return 1;
+    const penumbra::AliasFreeHardFrame edge_frame = hard.readFrame();
+    const std::vector<float> vis_edge = visible[1].download<float>();
+    const double full_ms = timedFrame([&] { return runSamples(stencil, AaMode::Full, visible[2]); }, "hard-shadow (--aa full)");
+    if (full_ms < 0) return 1;
+    const penumbra::AliasFreeHardFrame full_frame = hard.readFrame();
+    const std::vector<float> vis_full = visible[2].download<float>();
+    const std::vector<glm::vec4> full_positions = sample_pos.download<glm::vec4>(0, all);
+
+    auto flaggedCount = [&](const std::vector<uint32_t>& ws) {
+        size_t c = 0;
+        for (size_t i = 0; i < p; ++i) c += v.surface(i) && (ws[i] & PENUMBRA_AA_FLAG) != 0;
+        return c;
+    };
+    auto differing = [&](const std::vector<float>& a, const std::vector<float>& b) {
+        size_t c = 0;
+        for (size_t i = 0; i < p; ++i) c += v.surface(i) && a[i] != b[i];
+        return c;
+    };
+    const size_t flagged = flaggedCount(words);
+    const size_t edge_vs_full = differing(vis_edge, vis_full);
+    const double flagged_fraction = v.count ? double(flagged) / double(v.count) : 0.0;
+
+    // With --reference: the other stencil, run the same way (the Chebyshev one's pass timed on its own).
+    std::vector<uint32_t> other_words;
+    std::vector<float> vis_other;
+    double other_ms = 0;
+    if (stencils[1 - main_kind]) {
+        ShadowEdgeStencil& other = *stencils[1 - main_kind];
+        other_ms = timedFrame(runStencil(other), "shadow-edge stencil (other kind)");
+        if (other_ms < 0 || runSamples(other, AaMode::Edge, visible[3]) != Status::Ok) return 1;
+        other_words = other.readStencil();
+        vis_other = visible[3].download<float>();
+    }
+
+    // --reference: the oracle on the very points the GPU tested (centres and sub-samples of --aa
+    // full), and on 64 points per pixel (the rotated grid with N = 64, placed on the pixel's plane
+    // as the sub-samples are) for the RMSE of off / edge / full.
+    Json reference;
+    std::vector<uint8_t> missed[2];
+    double rmse[4] = {0, 0, 0, 0};  // off, edge, full, other edge
+    double reference_ms = 0;
+    if (args.reference) {
+        const auto t0 = std::chrono::steady_clock::now();
+        penumbra::reference::VisibilityOptions vo;
+        vo.coplanar_epsilon = options.coplanar_epsilon;
+        const std::vector<uint8_t> lit = oracleLit(
+            oracle, full_positions, v.faces, [&](size_t i) { return i < p ? i : (i - p) / n; }, light.light, vo,
+            "oracle on the sub-samples");
+        size_t edge_pixels = 0, tie_pixels = 0, missed_count[2] = {0, 0};
+        for (int k = 0; k < 2; ++k) missed[k].assign(p, 0);
+        for (size_t i = 0; i < p; ++i) {
+            if (!v.surface(i)) continue;
+            bool any_lit = lit[i] == 1, any_dark = lit[i] == 0, tie = lit[i] == 2;
+            for (uint32_t k = 0; k < n; ++k) {
+                const uint8_t s = lit[p + i * n + k];
+                any_lit |= s == 1, any_dark |= s == 0, tie |= s == 2;
+            }
+            tie_pixels += tie;
+            if (tie || !(any_lit && any_dark)) continue;
+            ++edge_pixels;
+            const std::vector<uint32_t>* ws[2] = {main_kind == 0 ? &words : &other_words, main_kind == 1 ? &words : &other_words};
+            for (int k = 0; k < 2; ++k) {
+                missed[k][i] = ((*ws[k])[i] & PENUMBRA_AA_FLAG) == 0;
+                missed_count[k] += missed[k][i];
+            }
+        }
+        penumbra::AaPatternOptions dense;
+        dense.samples = 64;
+        const penumbra::AaFootprints ref64 = penumbra::aaFootprintsCpu(v.view, v.positions.data(), v.faces.data(), dense);
+        const std::vector<uint8_t> lit64 =
+            oracleLit(oracle, ref64.sub_samples, v.faces, [](size_t i) { return i / 64; }, light.light, vo, "oracle, 64 points per pixel");
+        const std::vector<float>* modes[4] = {&vis_off, &vis_edge, &vis_full, &vis_other};
+        double sum[4] = {0, 0, 0, 0};
+        size_t compared = 0, ties64 = 0;
+        for (size_t i = 0; i < p; ++i) {
+            if (!v.surface(i)) continue;
+            uint32_t lit_points = 0, points = 0;
+            for (uint32_t k = 0; k < 64; ++k) {
+                const uint8_t s = lit64[i * 64 + k];
+                ties64 += s == 2;
+                points += s != 2;
+                lit_points += s == 1;
+            }
+            if (points == 0) continue;
+            const double truth = double(lit_points) / double(points);
+            ++compared;
+            for (int m = 0; m < 4; ++m) {
+                if (modes[m]->empty()) continue;
+                const double e = double((*modes[m])[i]) - truth;
+                sum[m] += e * e;
+            }
+        }
+        for (int m = 0; m < 4; ++m) rmse[m] = compared ? std::sqrt(sum[m] / double(compared)) : 0.0;
+        const int chosen = args.aa == "edge" ? 1 : 2;
+        reference = {{"rmse", rmse[chosen]},
+                     {"missed_edge_pixels", missed_count[main_kind]},
+                     {"edge_pixels", edge_pixels},
+                     {"tie_pixels", tie_pixels},
+                     {"points", full_positions.size()},
+                     {"compared_pixels", compared},
+                     {"dense_points_per_pixel", 64},
+                     {"dense_ties", ties64},
+                     {"dense_stretched", ref64.stretched},
+                     {"provable_missed", missed_count[0]},
+                     {"chebyshev_missed", missed_count[1]}};
+        reference_ms = msSince(t0);
+    }
+
+    // Images: --aa's, the off | edge | full strip and the stencil overlay.
+    const auto t0 = std::chrono::steady_clock::now();
+    const int shade = args.shading == "bent" ? 1 : 0;
+    penumbra::scene::ImageRgb8 images[3][2];
+    shadeGpuImages(v, merged, light_pos, vis_off, images[0]);
+    shadeGpuImages(v, merged, light_pos, vis_edge, images[1]);
+    shadeGpuImages(v, merged, light_pos, vis_full, images[2]);
+    penumbra::scene::writePng(args.out, images[args.aa == "edge" ? 1 : 2][shade]);
+    const std::string compare_path = siblingPath(args.out, "_aa_compare"), stencil_path = siblingPath(args.out, "_aa_stencil");
+    penumbra::scene::writePng(compare_path, sideBySide({&images[0][shade], &images[1][shade], &images[2][shade]}));
+    writeStencilPng(stencil_path, images[1][shade], v, words, missed[main_kind]);
+    const double shade_ms = msSince(t0);
+
+    const size_t other_flagged = other_words.empty() ? 0 : flaggedCount(other_words);
+    if (args.json) {
+        Json j = reportHead(args, "hard");
+        j["renderer"] = renderer;
+        j["width"] = w;
+        j["height"] = h;
+        j["triangles"] = oracle.triangleCount();
+        j["view_samples"] = v.count;
+        j["light_samples"] = 1;
+        j["light"] = {{"position", vec3Json(light_pos)}, {"radius", 0}};
+        j["hard"] = {{"view_samples", args.view_samples}, {"coplanar_epsilon", options.coplanar_epsilon}};
+        Json skips = Json::array();
+        for (const std::string& s : args.skip_list)
+            if (s != "cull") skips.push_back(s);
+        j["skips"] = skips;
+        Json aa = {{"mode", args.aa},
+                   {"samples", n},
+                   {"pattern", "rotated"},
+                   {"stencil", args.aa_stencil},
+                   {"flagged", flagged},
+                   {"flagged_fraction", flagged_fraction},
+                   {"extra_samples", uint64_t(flagged) * n},
+                   {"seed_estimate", 1.0 + double(n) * flagged_fraction},
+                   {"edge_vs_full_differing_pixels", edge_vs_full},
+                   {"tested_samples", {{"off", v.count}, {"edge", edge_frame.statistics.listed_samples},
+                                       {"full", full_frame.statistics.listed_samples}}},
+                   {"stencil_pairs", stencil_status[PENUMBRA_AA_STATUS_PAIRS]},
+                   {"stencil_exact_tests", stencil_status[PENUMBRA_AA_STATUS_EXACT]},
+                   {"stencil_list_overflow", stencil_status[PENUMBRA_AA_STATUS_LIST_OVERFLOW]},
+                   {"timings_ms", {{"off", off_ms},
+                                   {"stencil", stencil_ms},
+                                   {"edge_samples", edge_ms},
+                                   {"edge", stencil_ms + edge_ms},
+                                   {"full", full_ms},
+                                   {"edge_over_off", (stencil_ms + edge_ms) / off_ms},
+                                   {"full_over_off", full_ms / off_ms}}}};
+        if (args.reference) {
+            aa["rmse"] = {{"off", rmse[0]}, {"edge", rmse[1]}, {"full", rmse[2]}};
+            const char* other_name = main_kind == 0 ? "chebyshev" : "provable";
+            aa[other_name] = {{"flagged", other_flagged},
+                              {"flagged_fraction", v.count ? double(other_flagged) / double(v.count) : 0.0},
+                              {"missed_edge_pixels", main_kind == 0 ? reference["chebyshev_missed"] : reference["provable_missed"]},
+                              {"edge_vs_full_differing_pixels", differing(vis_other, vis_full)},
+                              {"rmse_edge", rmse[3]},
+                              {"stencil_ms", other_ms}};
+            j["reference"] = reference;
+        }
+        j["aa"] = aa;
+        j["timings_ms"] = {{"load", load_ms},           {"gbuffer", v.ms}, {"aa_frames", off_ms + stencil_ms + edge_ms + full_ms},
+                           {"reference", reference_ms}, {"shade_and_write", shade_ms}, {"total", msSince(t_start)}};
+        j["out"] = args.out;
+        j["aa_compare"] = compare_path;
+        j["aa_stencil"] = stencil_path;
+        printReport(j);
+    } else {
+        std::printf("%s (hard, --aa %s, %ux %s stencil, %s): %zu of %zu pixels flagged (%.1f%%), edge vs full: %zu pixels differ; "
+                    "%.1f ms off, %.1f ms stencil + %.1f ms edge, %.1f ms full -> %s\n",
+                    args.scene.c_str(), args.aa.c_str(), n, args.aa_stencil.c_str(), renderer.c_str(), flagged, v.count,
+                    100.0 * flagged_fraction, edge_vs_full, off_ms, stencil_ms, edge_ms, full_ms, args.out.c_str());
+        if (args.reference) {
+            std::printf("reference: %s edge pixels, missed: provable %s, chebyshev %s; RMSE vs 64 points per pixel: off %.4f, "
+                        "edge %.4f, full %.4f\n",
+                        reference["edge_pixels"].dump().c_str(), reference["provable_missed"].dump().c_str(),
+                        reference["chebyshev_missed"].dump().c_str(), rmse[0], rmse[1], rmse[2]);
+        }
+    }
+    return 0;
+}
+
 // --mode hard: the GPU alias-free hard-shadow pipeline from the light's centre.
 int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
             const MergedScene& merged, const glm::dvec3& light_pos, double load_ms,
@@ -907,6 +1309,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height;
     const GpuViewSamples v(args, scene, gpu);
+    if (args.aa != "off") return runHardAa(args, oracle, merged, light_pos, gpu, v, context.renderer(), load_ms, t_start);
     const double gbuffer_ms = v.ms;
     const bool depth_input = v.depth_input;
     const std::vector<glm::vec4>& positions = v.positions;
