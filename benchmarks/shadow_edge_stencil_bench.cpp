@@ -24,8 +24,10 @@
 // Methods, all timed in the same entry (penumbra::bench::timeInterleaved: one warm-up call each,
 // then per iteration one call each, interleaved with a rotating start; medians):
 //   stencil    the provable stencil's run() (sub-samples, footprint lists, light pass, bits).
-//   edge_hard  writeSampleBuffer(Edge) + AliasFreeHardShadows::run on P (1 + N) slots (only the
-//              flagged pixels' sub-samples present) + resolve(Edge).
+//   edge_hard  writeSampleBuffer(Edge, budget) + AliasFreeHardShadows::run on sampleCount(Edge,
+//              budget) = P + budget N samples (the flagged pixels' sub-samples packed after the
+//              centres; budget = the frame's flagged count, counted in an untimed run: an engine
+//              would take the last frame's plus a margin) + resolve(Edge, budget).
 //   full       writeSampleBuffer(Full) + the hard run (every pixel's sub-samples) + resolve(Full).
 //   off        the hard run on the P centres (the G-buffer itself) + resolve(Off).
 //   chebyshev  the Chebyshev stencil's run() (sub-samples, the moment map and its levels, the test).
@@ -54,6 +56,7 @@
 //                      galoppo2010 accepts misses); err_chebyshev_inner_missed_edge for chebyshev_inner
 //   pairs, exact_tests, list_overflow   the provable stencil's readStatus() (PENUMBRA_AA_STATUS_PAIRS,
 //                      _EXACT, _LIST_OVERFLOW: overflowing pixels are flagged, safe)
+//   budget, err_budget_overflow  the edge layout's budget and the flagged pixels past it (0)
 //   untested_full      samples of the full run the hard pipeline left PENUMBRA_AFH_UNTESTED (outside
 //                      its frustum or past its list blocks; 0 expected)
 // Read-backs happen after the timed runs: one more untimed full and edge run give the visibilities.
@@ -198,7 +201,12 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         const penumbra::AliasFreeHardShadows::DrawCasters draw = [&f](penumbra::CasterClass cls) {
             if (cls == penumbra::CasterClass::Open) f.gpu->draw();  // every triangle, never culled
         };
-        bool runs_ok = true;
+        // The edge layout's budget: this frame's flagged count (an engine would take the last
+        // frame's plus a margin), from one more untimed run with the final light.
+        const bool runs_ok_setup = stencil.run(f.centreRange(), f.normalRange(), f.view, light, casters) == penumbra::Status::Ok;
+        uint32_t budget = 0;
+        for (uint32_t word : stencil.readStencil()) budget += (word & PENUMBRA_AA_FLAG) != 0;
+        bool runs_ok = runs_ok_setup;
         auto stencilRun = [&](gl::ShadowEdgeStencil* s) {
             return [&, s] {
                 runs_ok &= s->run(f.centreRange(), f.normalRange(), f.view, light, casters) == penumbra::Status::Ok;
@@ -206,11 +214,12 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         };
         auto hardAndResolve = [&](penumbra::AaMode mode) {
             if (mode != penumbra::AaMode::Off)
-                runs_ok &= stencil.writeSampleBuffer(mode, whole(sample_pos), whole(sample_nrm)) == penumbra::Status::Ok;
+                runs_ok &= stencil.writeSampleBuffer(mode, whole(sample_pos), whole(sample_nrm), budget) == penumbra::Status::Ok;
             const bool off = mode == penumbra::AaMode::Off;
-            const uint32_t count = off ? p : extended;
+            const uint32_t count = stencil.sampleCount(mode, budget);
             runs_ok &= hard.run(off ? centre_input : extended_input, count, light, draw) == penumbra::Status::Ok;
-            runs_ok &= stencil.resolve(mode, {hard.stateBuffer().id(), 0, 4ull * count}, whole(visible)) == penumbra::Status::Ok;
+            runs_ok &= stencil.resolve(mode, {hard.stateBuffer().id(), 0, 4ull * count}, whole(visible), budget) ==
+                       penumbra::Status::Ok;
         };
         std::vector<penumbra::bench::TimedMethod> methods;
         methods.push_back({"stencil", stencilRun(&stencil), {}, {}});
@@ -295,6 +304,8 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         state.counters["exact_tests"] = double(status[PENUMBRA_AA_STATUS_EXACT]);
         state.counters["list_overflow"] = double(status[PENUMBRA_AA_STATUS_LIST_OVERFLOW]);
         state.counters["untested_full"] = double(untested);
+        state.counters["budget"] = double(budget);
+        state.counters["err_budget_overflow"] = double(stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]);
         if (differing + missed > 0) {
             std::fprintf(stderr, "shadow_edge_stencil_bench %s/%u: %zu pixels differ between edge and full, %zu edge pixels"
                                  " unflagged\n", spec.name.c_str(), samples, differing, missed);

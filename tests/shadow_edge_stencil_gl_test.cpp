@@ -129,6 +129,41 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
         const std::vector<float> cpu_visible = penumbra::aaResolve(mode, states[m], f.width * f.height, samples, gpu_flags.data());
         CHECK(visible[m] == cpu_visible);
     }
+    // The packed edge layout under a budget B of pixels (the engine runs sampleCount(Edge, B)
+    // samples): B = the flagged count holds them all (== full), B = half of it leaves the rest
+    // single-sampled and counted in the status; GPU == twin either way.
+    {
+        const uint32_t pixels = f.width * f.height;
+        uint32_t flagged_count = 0;
+        for (uint8_t flag : gpu_flags) flagged_count += flag;
+        for (const uint32_t budget : {flagged_count, flagged_count / 2}) {
+            CAPTURE(budget);
+            const uint32_t budget_count = stencil.sampleCount(penumbra::AaMode::Edge, budget);
+            REQUIRE(budget_count == pixels + budget * samples);
+            REQUIRE(stencil.writeSampleBuffer(penumbra::AaMode::Edge, whole(edge_pos), whole(edge_nrm), budget) ==
+                    penumbra::Status::Ok);
+            std::vector<vec4> budget_pos, budget_nrm;
+            penumbra::aaSampleBuffer(gpu_f, gpu_flags.data(), budget_pos, budget_nrm, budget);
+            REQUIRE(budget_pos.size() == budget_count);
+            CHECK(std::memcmp(edge_pos.download<vec4>(0, budget_count).data(), budget_pos.data(), budget_count * sizeof(vec4)) == 0);
+            CHECK(std::memcmp(edge_nrm.download<vec4>(0, budget_count).data(), budget_nrm.data(), budget_count * sizeof(vec4)) == 0);
+            REQUIRE(pipeline.run(penumbra::SampleBufferInput{whole(edge_pos), whole(edge_nrm)}, budget_count, light, draw) ==
+                    penumbra::Status::Ok);
+            const std::vector<uint32_t> budget_states = pipeline.stateBuffer().download<uint32_t>(0, budget_count);
+            REQUIRE(stencil.resolve(penumbra::AaMode::Edge, {pipeline.stateBuffer().id(), 0, 4ull * budget_count},
+                                    whole(visible_buffer), budget) == penumbra::Status::Ok);
+            const std::vector<float> budget_visible = visible_buffer.download<float>();
+            CHECK(budget_visible ==
+                  penumbra::aaResolve(penumbra::AaMode::Edge, budget_states, pixels, samples, gpu_flags.data(), budget));
+            CHECK(stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW] ==
+                  penumbra::aaBudgetOverflow(gpu_flags.data(), pixels, budget));
+            if (budget == flagged_count) CHECK(budget_visible == visible[1]);
+            // Too small a range for the budget's layout.
+            CHECK(stencil.resolve(penumbra::AaMode::Edge, {pipeline.stateBuffer().id(), 0, 4ull * budget_count - 4},
+                                  whole(visible_buffer), budget) == penumbra::Status::RangeTooSmall);
+        }
+    }
+
     // Driver-independent: every unflagged pixel's points agree in the full run; edge == full.
     const uint32_t p = f.width * f.height;
     size_t missed = 0, flagged = 0, surface = 0;

@@ -443,6 +443,43 @@ TEST_CASE("resolve and bad input") {
     CHECK_THROWS_WITH_AS(penumbra::aaResolve(penumbra::AaMode::Edge, states, 2, 4), doctest::Contains("needs the stencil"),
                          penumbra::Error);
 
+    // The packed edge layout: 3 pixels, 2 sub-samples, pixels 0 and 2 flagged. Every pixel held:
+    // pixel 2 (rank 1) at 3 + 2; a budget of 1 pixel: 3 + 2 samples, pixel 2 single-sampled.
+    {
+        penumbra::AaFootprints g;
+        g.pixels = 3;
+        g.samples = 2;
+        for (int i = 0; i < 3; ++i) {
+            g.centres.emplace_back(float(i), 0.0f, 0.0f, 1.0f);
+            g.normals.emplace_back(0.0f, 1.0f, 0.0f, 0.0f);
+            g.sub_samples.emplace_back(float(i), 1.0f, 0.0f, 1.0f);
+            g.sub_samples.emplace_back(float(i), 2.0f, 0.0f, 1.0f);
+        }
+        const uint8_t g_flags[3] = {1, 0, 1};
+        std::vector<vec4> pos, nrm;
+        penumbra::aaSampleBuffer(g, g_flags, pos, nrm);
+        REQUIRE(pos.size() == 9);
+        CHECK(pos[3] == vec4(0, 1, 0, 1));
+        CHECK(pos[5] == vec4(2, 1, 0, 1));
+        CHECK(pos[6] == vec4(2, 2, 0, 1));
+        CHECK(pos[7].w == 0.0f);  // unused blocks of the budget
+        CHECK(pos[8].w == 0.0f);
+        penumbra::aaSampleBuffer(g, g_flags, pos, nrm, 1);
+        REQUIRE(pos.size() == 5);
+        CHECK(pos[4] == vec4(0, 2, 0, 1));
+        CHECK(penumbra::aaSampleCount(penumbra::AaMode::Edge, 3, 2, 1) == 5);
+        CHECK(penumbra::aaSampleCount(penumbra::AaMode::Full, 3, 2, 1) == 9);
+        CHECK(penumbra::aaBudgetOverflow(g_flags, 3, 1) == 1);
+        CHECK(penumbra::aaBudgetOverflow(g_flags, 3, 2) == 0);
+        const uint32_t L = PENUMBRA_AFH_LIT, S = PENUMBRA_AFH_SHADOWED;
+        const std::vector<uint32_t> held = {S, L, L, L, S, S, L, S, S};  // centres, ranks 0 and 1, an unused block
+        CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, held, 3, 2, g_flags) == std::vector<float>{0.5f, 1.0f, 0.5f});
+        const std::vector<uint32_t> budget_one = {S, L, L, L, S};
+        CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, budget_one, 3, 2, g_flags, 1) == std::vector<float>{0.5f, 1.0f, 1.0f});
+        CHECK_THROWS_WITH_AS(penumbra::aaResolve(penumbra::AaMode::Edge, budget_one, 3, 2, g_flags), doctest::Contains("5 states"),
+                             penumbra::Error);
+    }
+
     penumbra::AaFootprints f;
     f.pixels = 1;
     f.samples = 4;

@@ -1114,10 +1114,20 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
         const Status s = hard.run(penumbra::SampleBufferInput{range(centres), normals}, p, light, draw);
         return s == Status::Ok ? stencil.resolve(AaMode::Off, {states.buffer, 0, 4ull * p}, range(visible[0])) : s;
     };
-    auto runSamples = [&](ShadowEdgeStencil& st, AaMode mode, const Buffer& out) {
-        Status s = st.writeSampleBuffer(mode, range(sample_pos), range(sample_nrm));
-        if (s == Status::Ok) s = hard.run(penumbra::SampleBufferInput{range(sample_pos), range(sample_nrm)}, all, light, draw);
-        return s == Status::Ok ? st.resolve(mode, states, range(out)) : s;
+    // Edge packs the flagged pixels' sub-samples after the centres, `budget` pixels' worth: the
+    // hard pipeline runs P + budget N samples (full: P (1 + N)).
+    auto runSamples = [&](ShadowEdgeStencil& st, AaMode mode, const Buffer& out, uint32_t budget) {
+        const uint32_t count = st.sampleCount(mode, budget);
+        Status s = st.writeSampleBuffer(mode, range(sample_pos), range(sample_nrm), budget);
+        if (s == Status::Ok) s = hard.run(penumbra::SampleBufferInput{range(sample_pos), range(sample_nrm)}, count, light, draw);
+        return s == Status::Ok ? st.resolve(mode, {states.buffer, 0, 4ull * count}, range(out), budget) : s;
+    };
+    // The edge layout's budget: the frame's flagged count (an engine would take the last frame's
+    // plus a margin); every flag, surface or not, takes a rank.
+    auto budgetOf = [&](const std::vector<uint32_t>& ws) {
+        uint32_t c = 0;
+        for (uint32_t word : ws) c += (word & PENUMBRA_AA_FLAG) != 0;
+        return c;
     };
     auto runStencil = [&](ShadowEdgeStencil& st) { return [&] { return st.run(range(centres), normals, v.view, light, casters); }; };
     auto flaggedCount = [&](const std::vector<uint32_t>& ws) {
@@ -1138,12 +1148,16 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     runs[main_kind].stencil_ms = timedFrame(runStencil(stencil), "shadow-edge stencil");
     if (runs[main_kind].stencil_ms < 0) return 1;
     runs[main_kind].words = stencil.readStencil();
+    const uint32_t budget = budgetOf(runs[main_kind].words);
     const auto stencil_status = stencil.readStatus();
-    const double edge_ms = timedFrame([&] { return runSamples(stencil, AaMode::Edge, visible[1]); }, "hard-shadow (--aa edge)");
+    const double edge_ms =
+        timedFrame([&] { return runSamples(stencil, AaMode::Edge, visible[1], budget); }, "hard-shadow (--aa edge)");
     if (edge_ms < 0) return 1;
     const penumbra::AliasFreeHardFrame edge_frame = hard.readFrame();
+    const uint32_t budget_overflow = stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW];
     runs[main_kind].visible_edge = visible[1].download<float>();
-    const double full_ms = timedFrame([&] { return runSamples(stencil, AaMode::Full, visible[2]); }, "hard-shadow (--aa full)");
+    const double full_ms =
+        timedFrame([&] { return runSamples(stencil, AaMode::Full, visible[2], penumbra::kAaAllPixels); }, "hard-shadow (--aa full)");
     if (full_ms < 0) return 1;
     const penumbra::AliasFreeHardFrame full_frame = hard.readFrame();
     const std::vector<float> vis_full = visible[2].download<float>();
@@ -1152,8 +1166,9 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     for (int k = 0; k < kAaStencils; ++k) {
         if (k == main_kind || !stencils[k]) continue;
         runs[k].stencil_ms = timedFrame(runStencil(*stencils[k]), kAaStencilNames[k]);
-        if (runs[k].stencil_ms < 0 || runSamples(*stencils[k], AaMode::Edge, visible[1]) != Status::Ok) return 1;
+        if (runs[k].stencil_ms < 0) return 1;
         runs[k].words = stencils[k]->readStencil();
+        if (runSamples(*stencils[k], AaMode::Edge, visible[1], budgetOf(runs[k].words)) != Status::Ok) return 1;
         runs[k].visible_edge = visible[1].download<float>();
     }
     for (AaStencilRun& r : runs)
@@ -1271,6 +1286,8 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
                    {"flagged_fraction", flagged_fraction},
                    {"extra_samples", uint64_t(flagged) * n},
                    {"seed_estimate", 1.0 + double(n) * flagged_fraction},
+                   {"budget", budget},
+                   {"budget_overflow", budget_overflow},
                    {"edge_vs_full_differing_pixels", edge_vs_full},
                    {"tested_samples", {{"off", v.count}, {"edge", edge_frame.statistics.listed_samples},
                                        {"full", full_frame.statistics.listed_samples}}},
@@ -1283,6 +1300,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
                                    {"edge", stencil_ms + edge_ms},
                                    {"full", full_ms},
                                    {"edge_samples_over_off", edge_ms / off_ms},
+                                   {"edge_samples_over_seed_estimate", edge_ms / off_ms / (1.0 + double(n) * flagged_fraction)},
                                    {"edge_over_off", (stencil_ms + edge_ms) / off_ms},
                                    {"full_over_off", full_ms / off_ms}}}};
         if (args.reference) {

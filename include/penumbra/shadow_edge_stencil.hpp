@@ -255,42 +255,71 @@ inline std::pair<glm::vec3, glm::vec3> aaFootprintBounds(const AaFootprints& f, 
     return {lo, hi};
 }
 
-/// The extended sample buffer: [0, P) the centres, then pixel i's N sub-samples at P + i * N + k,
-/// present when `flags` is null (full) or flags[i] != 0 (w == 0 otherwise: the lists skip them).
+/// Pixels whose sub-samples the edge layout holds: the budget, at most P (kAaAllPixels: every pixel).
+inline constexpr uint32_t kAaAllPixels = 0xffffffffu;
+
+/// Samples of the extended sample buffer for `mode` and `budget`: P (Off), P (1 + N) (Full),
+/// P + min(budget, P) N (Edge).
+inline uint64_t aaSampleCount(AaMode mode, uint32_t pixels, uint32_t samples, uint32_t budget = kAaAllPixels) {
+    if (mode == AaMode::Off) return pixels;
+    const uint64_t held = mode == AaMode::Full ? pixels : std::min(budget, pixels);
+    return uint64_t(pixels) + held * samples;
+}
+
+/// The extended sample buffer: [0, P) the centres, then N sub-samples per multi-sampled pixel.
+/// Full (`flags` null): pixel i's at P + i N + k. Edge (`flags`): packed, the flagged pixel of
+/// rank r (flagged pixels before it, in pixel order) at P + r N + k while r < budget; a flagged
+/// pixel past the budget keeps its centre alone (aaBudgetOverflow counts them), and the slots of
+/// ranks in [flagged count, budget) have w == 0 (the lists skip them). aaSampleCount entries.
 /// Normals: each sample carries its pixel's.
 inline void aaSampleBuffer(const AaFootprints& f, const uint8_t* flags, std::vector<glm::vec4>& positions,
-                           std::vector<glm::vec4>& normals) {
+                           std::vector<glm::vec4>& normals, uint32_t budget = kAaAllPixels) {
     const size_t p = f.pixels, n = f.samples;
-    positions.assign(p * (1 + n), glm::vec4(0.0f));
-    normals.assign(p * (1 + n), glm::vec4(0.0f));
+    const size_t count = aaSampleCount(flags ? AaMode::Edge : AaMode::Full, f.pixels, f.samples, budget);
+    positions.assign(count, glm::vec4(0.0f));
+    normals.assign(count, glm::vec4(0.0f));
+    size_t rank = 0;
     for (size_t i = 0; i < p; ++i) {
         positions[i] = f.centres[i];
         normals[i] = f.normals[i];
         if (flags && !flags[i]) continue;
+        const size_t slot = flags ? rank++ : i;
+        if (p + slot * n >= count) continue;  // past the budget
         for (size_t k = 0; k < n; ++k) {
-            positions[p + i * n + k] = f.sub_samples[i * n + k];
-            normals[p + i * n + k] = f.normals[i];
+            positions[p + slot * n + k] = f.sub_samples[i * n + k];
+            normals[p + slot * n + k] = f.normals[i];
         }
     }
 }
 
+/// Flagged pixels the edge layout of `budget` leaves single-sampled (0 when it holds them all).
+inline uint32_t aaBudgetOverflow(const uint8_t* flags, uint32_t pixels, uint32_t budget) {
+    uint32_t flagged = 0;
+    for (uint32_t i = 0; i < pixels; ++i) flagged += flags[i] != 0;
+    return flagged > budget ? flagged - budget : 0;
+}
+
 /// Per pixel: the fraction of its samples the hard pipeline found lit (PENUMBRA_AFH_LIT), from
-/// states of aaSampleBuffer's layout. Off: the centre's state; Full: the mean of the N
-/// sub-samples; Edge: the mean where flags[i] != 0, else the centre's state. N a power of two
-/// makes the means exact, so Edge and Full agree bit for bit wherever their sample states agree.
+/// states of aaSampleBuffer's layout (the same budget). Off: the centre's state; Full: the mean of
+/// the N sub-samples; Edge: the mean where the pixel is flagged and within the budget, else the
+/// centre's state. N a power of two makes the means exact, so Edge and Full agree bit for bit
+/// wherever their sample states agree.
 inline std::vector<float> aaResolve(AaMode mode, const std::vector<uint32_t>& states, uint32_t pixels, uint32_t samples,
-                                    const uint8_t* flags = nullptr) {
-    PENUMBRA_CHECK(states.size() >= (mode == AaMode::Off ? size_t(pixels) : size_t(pixels) * (1 + samples)),
-                   "penumbra::aaResolve: ", states.size(), " states for ", pixels, " pixels x ", samples, " samples");
+                                    const uint8_t* flags = nullptr, uint32_t budget = kAaAllPixels) {
+    PENUMBRA_CHECK(states.size() >= aaSampleCount(mode, pixels, samples, budget), "penumbra::aaResolve: ", states.size(),
+                   " states for ", pixels, " pixels x ", samples, " samples");
     PENUMBRA_CHECK(mode != AaMode::Edge || flags, "penumbra::aaResolve: edge mode needs the stencil");
     std::vector<float> lit(pixels);
+    uint32_t rank = 0;
     for (uint32_t i = 0; i < pixels; ++i) {
-        if (mode == AaMode::Off || (mode == AaMode::Edge && !flags[i])) {
+        const bool multi = mode == AaMode::Full || (mode == AaMode::Edge && flags[i] && rank++ < budget);
+        if (!multi) {
             lit[i] = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
             continue;
         }
+        const size_t slot = mode == AaMode::Full ? i : rank - 1;
         uint32_t count = 0;
-        for (uint32_t k = 0; k < samples; ++k) count += states[pixels + size_t(i) * samples + k] == PENUMBRA_AFH_LIT;
+        for (uint32_t k = 0; k < samples; ++k) count += states[pixels + slot * samples + k] == PENUMBRA_AFH_LIT;
         lit[i] = float(count) / float(samples);
     }
     return lit;

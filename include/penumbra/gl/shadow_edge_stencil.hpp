@@ -9,14 +9,15 @@
 //             H_view each; casters as a vec3 float vertex range + uint32 index range (GL_TRIANGLES).
 //   produces: subSamples() (vec4 [P * N]: pixel i's sub-sample k at i N + k), stencil() (uint [P]:
 //             PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED), then on request the hard pipeline's input
-//             (writeSampleBuffer: positions + normals [P (1 + N)], the layout of aaSampleBuffer) and
-//             per-pixel visibility from the hard pipeline's states (resolve).
+//             (writeSampleBuffer: positions + normals [sampleCount(mode, budget)], the layout of
+//             aaSampleBuffer: edge mode packs the flagged pixels' sub-samples, ranked by a scan, up
+//             to a budget of pixels) and per-pixel visibility from the hard pipeline's states (resolve).
 //   per frame: run() — (1) sub-samples + facing, (2) footprint boxes and counts per light texel,
 //             (3) exclusive scan, (4) scatter, (5) the footprint light pass: every caster drawn with
 //             the conservative emitter into an attachment-less grid; each fragment classifies its
 //             texel's footprints against the triangle (sphere test, exact test where undecided),
-//             (6) final bits. Then the engine runs AliasFreeHardShadows on writeSampleBuffer's
-//             output and calls resolve() with its states. Nothing is read back, queried, allocated
+//             (6) final bits. Then writeSampleBuffer (edge: flags, scan, pack), the engine's
+//             AliasFreeHardShadows on its sampleCount() samples, resolve() with their states. Nothing is read back, queried, allocated
 //             or thrown per frame: misuse returns a Status.
 //   equals:   the CPU twin (aaFootprintsCpu, provableEdgeStencilCpu with the same options; casters
 //             not culled) bit for bit where fp64 + - * / sqrt are correctly rounded (llvmpipe) and
@@ -99,7 +100,8 @@ public:
         status_ = Buffer(4 * PENUMBRA_AA_STATUS_WORDS);
         params_ = Buffer(sizeof(AaParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
         conservative_ubo_ = Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
-        scanner_.reserve(texels + 1);
+        ranks_ = Buffer(4ull * (pixels_ + 1));
+        scanner_.reserve(std::max<uint64_t>(texels, pixels_) + 1);
 
         footprints_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/footprints.comp.glsl", {}, library);
         setup_program_[0] = buildComputeProgram("penumbra/shadow_edge_stencil/setup.comp.glsl", {{"PENUMBRA_AA_PASS", "0"}}, library);
@@ -110,6 +112,7 @@ public:
                                          conservative_.defines, library);
         finish_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/finish.comp.glsl", {}, library);
         buffer_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/sample_buffer.comp.glsl", {}, library);
+        ranks_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/ranks.comp.glsl", {}, library);
         resolve_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/resolve.comp.glsl", {}, library);
         if (kind == AaStencilKind::Chebyshev) {
             PENUMBRA_CHECK(chebyshev.threshold > 0.0f && chebyshev.threshold < 1.0f && chebyshev.bias_scale >= 0.0f &&
@@ -150,8 +153,13 @@ public:
 
     uint32_t pixels() const { return pixels_; }
     uint32_t samples() const { return pattern_.samples; }
-    /// Bytes of each of writeSampleBuffer's ranges: P (1 + N) vec4.
+    /// Bytes of each of writeSampleBuffer's ranges: P (1 + N) vec4 (every mode and budget fits).
     uint64_t sampleBufferBytes() const { return 16ull * pixels_ * (1 + pattern_.samples); }
+    /// Samples of writeSampleBuffer's layout (the hard pipeline's sample count and the states
+    /// resolve() reads): P (Off), P (1 + N) (Full), P + min(budget, P) N (Edge).
+    uint32_t sampleCount(AaMode mode, uint32_t budget = kAaAllPixels) const {
+        return static_cast<uint32_t>(aaSampleCount(mode, pixels_, pattern_.samples, budget));
+    }
 
     /// The stencil of one frame (see the header comment). centres/normals: P vec4 each; `view` the
     /// engine's camera (its size must be the constructor's); `light.view_projection` must see every
@@ -205,37 +213,48 @@ public:
         return Status::Ok;
     }
 
-    /// The hard pipeline's input for `mode` (Edge: sub-samples of flagged pixels; Full: of every
-    /// pixel) from the last run: positions and normals, sampleBufferBytes() each, 16-byte aligned.
-    Status writeSampleBuffer(AaMode mode, const BufferRange& positions, const BufferRange& normals) {
+    /// The hard pipeline's input for `mode` from the last run: positions and normals,
+    /// 16 sampleCount(mode, budget) bytes each, 16-byte aligned (aaSampleBuffer's layout). Full:
+    /// every pixel's sub-samples. Edge: the flagged pixels' packed in pixel order (ranked by a
+    /// scan), the first `budget` of them; the engine runs the hard pipeline on sampleCount(Edge,
+    /// budget) samples, so a budget near the flagged count (e.g. the last frame's plus a margin)
+    /// skips the empty slots. Flagged pixels past it stay single-sampled (resolve() counts them:
+    /// readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]); the default holds every pixel.
+    Status writeSampleBuffer(AaMode mode, const BufferRange& positions, const BufferRange& normals,
+                             uint32_t budget = kAaAllPixels) {
         if (!ran_) return Status::NotReserved;
         if (mode == AaMode::Off) return Status::InvalidArgument;
-        if (positions.size < sampleBufferBytes() || normals.size < sampleBufferBytes() || !positions.buffer || !normals.buffer)
-            return Status::RangeTooSmall;
+        const uint64_t bytes = 16ull * sampleCount(mode, budget);
+        if (positions.size < bytes || normals.size < bytes || !positions.buffer || !normals.buffer) return Status::RangeTooSmall;
         if (positions.offset % 16 || normals.offset % 16) return Status::Misaligned;
-        setMode(mode);
+        setMode(mode, budget);
+        if (mode == AaMode::Edge) rankFlaggedPixels();
         bindCommon();
         bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
         bindRange(PENUMBRA_AA_BINDING_OUT_POSITIONS, positions);
         bindRange(PENUMBRA_AA_BINDING_OUT_NORMALS, normals);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
         dispatch(buffer_program_, pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         return Status::Ok;
     }
 
-    /// Per-pixel visibility (float [P]) from the hard pipeline's states: Off reads P states (the
-    /// centres), Edge and Full P (1 + N) (writeSampleBuffer's layout).
-    Status resolve(AaMode mode, const BufferRange& states, const BufferRange& visible) {
+    /// Per-pixel visibility (float [P]) from the hard pipeline's states, sampleCount(mode, budget)
+    /// of them in writeSampleBuffer's layout (Off: the P centres'); Edge takes the budget (and the
+    /// ranks) of the last writeSampleBuffer(Edge).
+    Status resolve(AaMode mode, const BufferRange& states, const BufferRange& visible, uint32_t budget = kAaAllPixels) {
         if (mode != AaMode::Off && !ran_) return Status::NotReserved;
-        const uint64_t need = 4ull * pixels_ * (mode == AaMode::Off ? 1 : 1 + pattern_.samples);
+        const uint64_t need = 4ull * sampleCount(mode, budget);
         if (states.size < need || visible.size < 4ull * pixels_ || !states.buffer || !visible.buffer) return Status::RangeTooSmall;
         if (states.offset % 4 || visible.offset % 4) return Status::Misaligned;
         if (!ran_) {  // Off before any run: the parameter block still needs the sizes
             params_staging_.view = glm::uvec4(width_, height_, pattern_.samples, 1u);
             glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
         }
-        setMode(mode);
+        setMode(mode, budget);
         bindCommon();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
         bindRange(PENUMBRA_AA_BINDING_STATES, states);
         bindRange(PENUMBRA_AA_BINDING_VISIBLE, visible);
         dispatch(resolve_program_, pixels_);
@@ -300,9 +319,20 @@ private:
         dispatch(chebyshev_program_, pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
-    void setMode(AaMode mode) {
+    void setMode(AaMode mode, uint32_t budget) {
         params_staging_.grid.w = mode == AaMode::Off ? PENUMBRA_AA_MODE_OFF : mode == AaMode::Edge ? PENUMBRA_AA_MODE_EDGE : PENUMBRA_AA_MODE_FULL;
+        params_staging_.limits.z = std::min(budget, pixels_);
         glNamedBufferSubData(params_.id(), offsetof(AaParams, grid), sizeof(glm::uvec4), &params_staging_.grid);
+        glNamedBufferSubData(params_.id(), offsetof(AaParams, limits), sizeof(glm::uvec4), &params_staging_.limits);
+    }
+    // The edge layout's ranks: 1 per flagged pixel (and 0 at entry P), exclusive-scanned in place.
+    void rankFlaggedPixels() {
+        bindCommon();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
+        dispatch(ranks_program_, uint64_t(pixels_) + 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        scanner_.scan(ScanKind::Exclusive, {ranks_.id(), 0, ranks_.size()}, {ranks_.id(), 0, ranks_.size()}, uint64_t(pixels_) + 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT);
     }
     static void bindRange(GLuint binding, const BufferRange& r) {
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, binding, r.buffer, static_cast<GLintptr>(r.offset), static_cast<GLsizeiptr>(r.size));
@@ -341,9 +371,10 @@ private:
     AaParams params_staging_{};
     BufferRange centres_{}, normals_{};
     bool ran_ = false;
-    Buffer sub_samples_, stencil_, footprints_, counts_, cursor_, list_, status_, params_, conservative_ubo_;
+    Buffer sub_samples_, stencil_, footprints_, counts_, cursor_, list_, status_, params_, conservative_ubo_, ranks_;
     Buffer min_depth_, min_cover_, moments_, covers_;
-    Program footprints_program_, setup_program_[2], classify_program_, finish_program_, buffer_program_, resolve_program_;
+    Program footprints_program_, setup_program_[2], classify_program_, finish_program_, buffer_program_, resolve_program_,
+        ranks_program_;
     Program moments_raster_, moments_level_[2], chebyshev_program_;
     GLuint vao_ = 0, fbo_ = 0;
 };

@@ -1,7 +1,9 @@
 // penumbra — shadow-edge stencil: the hard pipeline's input (the twin: aaSampleBuffer). Positions
-// and normals [P * (1 + N)]: the P centres, then pixel i's N sub-samples at P + i N + k where the
-// mode asks for them (grid.w: PENUMBRA_AA_MODE_FULL every pixel, _EDGE flagged pixels), w == 0
-// elsewhere (the sample lists skip those). One invocation per pixel.
+// and normals: the P centres, then N sub-samples per multi-sampled pixel. grid.w
+// PENUMBRA_AA_MODE_FULL: pixel i's at P + i N + k. _EDGE: packed, the flagged pixel of rank r
+// (ranks, the scanned flags) at P + r N + k while r < limits.z (the budget); invocation j < budget
+// also writes w == 0 into block j when j >= the flagged count (the lists skip those). One
+// invocation per pixel.
 #include "penumbra/shadow_edge_stencil/shadow_edge_stencil_shared.h"
 
 layout(local_size_x = PENUMBRA_AA_GROUP_SIZE) in;
@@ -12,6 +14,7 @@ layout(std430, binding = PENUMBRA_AA_BINDING_SUB_SAMPLES) readonly buffer Penumb
 layout(std430, binding = PENUMBRA_AA_BINDING_STENCIL) readonly buffer PenumbraAaStencil { uint penumbraAaStencil[]; };
 layout(std430, binding = PENUMBRA_AA_BINDING_OUT_POSITIONS) writeonly buffer PenumbraAaOutPositions { vec4 penumbraAaOutPositions[]; };
 layout(std430, binding = PENUMBRA_AA_BINDING_OUT_NORMALS) writeonly buffer PenumbraAaOutNormals { vec4 penumbraAaOutNormals[]; };
+layout(std430, binding = PENUMBRA_AA_BINDING_RANKS) readonly buffer PenumbraAaRanks { uint penumbraAaRanks[]; };
 
 void main() {
     uint p = penumbraAaParams.view.x * penumbraAaParams.view.y, n = penumbraAaParams.view.z;
@@ -20,9 +23,24 @@ void main() {
     vec4 normal = penumbraAaNormals[i];
     penumbraAaOutPositions[i] = penumbraAaCentres[i];
     penumbraAaOutNormals[i] = normal;
-    bool take = penumbraAaParams.grid.w == PENUMBRA_AA_MODE_FULL || (penumbraAaStencil[i] & PENUMBRA_AA_FLAG) != 0u;
+    if (penumbraAaParams.grid.w == PENUMBRA_AA_MODE_FULL) {
+        for (uint k = 0u; k < n; ++k) {
+            penumbraAaOutPositions[p + i * n + k] = penumbraAaSubSamples[i * n + k];
+            penumbraAaOutNormals[p + i * n + k] = normal;
+        }
+        return;
+    }
+    uint budget = min(penumbraAaParams.limits.z, p), flagged = penumbraAaRanks[p];
+    if (i < budget && i >= flagged) {  // an unused block of the budget
+        for (uint k = 0u; k < n; ++k) {
+            penumbraAaOutPositions[p + i * n + k] = vec4(0.0);
+            penumbraAaOutNormals[p + i * n + k] = vec4(0.0);
+        }
+    }
+    uint rank = penumbraAaRanks[i];
+    if ((penumbraAaStencil[i] & PENUMBRA_AA_FLAG) == 0u || rank >= budget) return;
     for (uint k = 0u; k < n; ++k) {
-        penumbraAaOutPositions[p + i * n + k] = take ? penumbraAaSubSamples[i * n + k] : vec4(0.0);
-        penumbraAaOutNormals[p + i * n + k] = take ? normal : vec4(0.0);
+        penumbraAaOutPositions[p + rank * n + k] = penumbraAaSubSamples[i * n + k];
+        penumbraAaOutNormals[p + rank * n + k] = normal;
     }
 }

@@ -35,6 +35,7 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_BINDING_OUT_NORMALS 5    // sample-buffer kernel: vec4 [P * (1 + N)]
 #define PENUMBRA_AA_BINDING_STATES 4         // resolve kernel: uint states of the hard pipeline
 #define PENUMBRA_AA_BINDING_VISIBLE 5        // resolve kernel: float [P]
+#define PENUMBRA_AA_BINDING_RANKS 6          // ranks, sample-buffer and resolve kernels: uint [P + 1], edge mode: flagged pixels before each (exclusive scan)
 // The Chebyshev stencil's moment map (moments.* and chebyshev.comp.glsl):
 #define PENUMBRA_AA_BINDING_MIN_DEPTH 4      // uint [W * H]: ordered bits of the least float depth (atomicMin)
 #define PENUMBRA_AA_BINDING_MIN_COVER 5      // uint [W * H]: ordered bits of the least cover value
@@ -46,6 +47,7 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_STATUS_LIST_OVERFLOW 1  // entries over the list capacity (their pixels are flagged: safe)
 #define PENUMBRA_AA_STATUS_PAIRS 2          // (footprint, triangle) pairs classified
 #define PENUMBRA_AA_STATUS_EXACT 3          // exact point tests of undecided pairs
+#define PENUMBRA_AA_STATUS_BUDGET_OVERFLOW 4  // flagged pixels past the edge layout's budget (resolve: single-sampled)
 #define PENUMBRA_AA_STATUS_WORDS 8
 
 #define PENUMBRA_AA_MODE_OFF 0u
@@ -69,7 +71,7 @@ struct PenumbraAaParams {
     vec4 offsets[PENUMBRA_AA_MAX_SAMPLES / 2];  // sub-sample offsets (pixels), two per vec4 (xy, zw)
     uvec4 view;                        // x: width, y: height, z: N, w: 1 = cull light-back-facing samples
     uvec4 grid;                        // x: light grid W, y: H, z: list capacity, w: mode (PENUMBRA_AA_MODE_*)
-    uvec4 limits;                      // x: max footprint texels, y: max list length per texel, z, w: 0
+    uvec4 limits;                      // x: max footprint texels, y: max list length per texel, z: edge-mode budget (pixels), w: 0
     vec4 chebyshev;                    // x: threshold, y: bias_scale, z: min_variance, w: d_far (empty texels)
     uvec4 moments;                     // x: levels, y: 1 = inner_shadow_proof, z: 1 = perspective light, w: the level a mip pass writes
 };
