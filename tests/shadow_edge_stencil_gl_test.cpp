@@ -255,6 +255,14 @@ TEST_CASE("GPU stencil: bad input returns a Status, setup errors throw") {
     CHECK(stencil.writeSampleBuffer(penumbra::AaMode::Off, whole(small), whole(small)) == penumbra::Status::InvalidArgument);
     CHECK(stencil.writeSampleBuffer(penumbra::AaMode::Edge, whole(small), whole(small)) == penumbra::Status::RangeTooSmall);
     CHECK(stencil.resolve(penumbra::AaMode::Full, whole(small), whole(small)) == penumbra::Status::RangeTooSmall);
+    // Edge's resolve reads the ranks of a writeSampleBuffer(Edge) after this run: none yet.
+    penumbra::gl::Buffer states(4ull * stencil.sampleCount(penumbra::AaMode::Full)), visible(4ull * 16 * 12);
+    CHECK(stencil.resolve(penumbra::AaMode::Edge, whole(states), whole(visible)) == penumbra::Status::NotReserved);
+    penumbra::gl::Buffer pos(stencil.sampleBufferBytes()), nrm(stencil.sampleBufferBytes());
+    REQUIRE(stencil.writeSampleBuffer(penumbra::AaMode::Edge, whole(pos), whole(nrm)) == penumbra::Status::Ok);
+    CHECK(stencil.resolve(penumbra::AaMode::Edge, whole(states), whole(visible)) == penumbra::Status::Ok);
+    REQUIRE(stencil.run(f.centreRange(), f.normalRange(), f.view, light, f.casterBuffers()) == penumbra::Status::Ok);
+    CHECK(stencil.resolve(penumbra::AaMode::Edge, whole(states), whole(visible)) == penumbra::Status::NotReserved);
 
     penumbra::AaPatternOptions jittered;
     jittered.pattern = penumbra::AaPattern::Jittered;

@@ -101,6 +101,8 @@ public:
         params_ = Buffer(sizeof(AaParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
         conservative_ubo_ = Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
         ranks_ = Buffer(4ull * (pixels_ + 1));
+        const uint32_t zero = 0;
+        glClearNamedBufferData(ranks_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         scanner_.reserve(std::max<uint64_t>(texels, pixels_) + 1);
 
         footprints_program_ = buildComputeProgram("penumbra/shadow_edge_stencil/footprints.comp.glsl", {}, library);
@@ -177,6 +179,7 @@ public:
         if (!(light.light.w == 0.0f || light.light.w == 1.0f)) return Status::InvalidArgument;
         centres_ = centres;
         normals_ = normals;
+        ranked_ = false;  // the edge layout's ranks follow this run's flags: writeSampleBuffer(Edge) again
         params_staging_ = aaParams(view, light, options_, pattern_, stencil_options_, capacity_, PENUMBRA_AA_MODE_EDGE, chebyshev_);
         glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
         const uint32_t zero = 0;
@@ -228,7 +231,10 @@ public:
         if (positions.size < bytes || normals.size < bytes || !positions.buffer || !normals.buffer) return Status::RangeTooSmall;
         if (positions.offset % 16 || normals.offset % 16) return Status::Misaligned;
         setMode(mode, budget);
-        if (mode == AaMode::Edge) rankFlaggedPixels();
+        if (mode == AaMode::Edge) {
+            rankFlaggedPixels();
+            ranked_ = true;
+        }
         bindCommon();
         bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
         bindRange(PENUMBRA_AA_BINDING_OUT_POSITIONS, positions);
@@ -241,9 +247,10 @@ public:
 
     /// Per-pixel visibility (float [P]) from the hard pipeline's states, sampleCount(mode, budget)
     /// of them in writeSampleBuffer's layout (Off: the P centres'); Edge takes the budget (and the
-    /// ranks) of the last writeSampleBuffer(Edge).
+    /// ranks) of the last writeSampleBuffer(Edge) since run() (NotReserved without one).
     Status resolve(AaMode mode, const BufferRange& states, const BufferRange& visible, uint32_t budget = kAaAllPixels) {
         if (mode != AaMode::Off && !ran_) return Status::NotReserved;
+        if (mode == AaMode::Edge && !ranked_) return Status::NotReserved;
         const uint64_t need = 4ull * sampleCount(mode, budget);
         if (states.size < need || visible.size < 4ull * pixels_ || !states.buffer || !visible.buffer) return Status::RangeTooSmall;
         if (states.offset % 4 || visible.offset % 4) return Status::Misaligned;
@@ -370,7 +377,7 @@ private:
     Scanner scanner_;
     AaParams params_staging_{};
     BufferRange centres_{}, normals_{};
-    bool ran_ = false;
+    bool ran_ = false, ranked_ = false;
     Buffer sub_samples_, stencil_, footprints_, counts_, cursor_, list_, status_, params_, conservative_ubo_, ranks_;
     Buffer min_depth_, min_cover_, moments_, covers_;
     Program footprints_program_, setup_program_[2], classify_program_, finish_program_, buffer_program_, resolve_program_,
