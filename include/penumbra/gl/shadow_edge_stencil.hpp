@@ -17,8 +17,8 @@
 //             the conservative emitter into an attachment-less grid; each fragment classifies its
 //             texel's footprints against the triangle (sphere test, exact test where undecided),
 //             (6) final bits. Then writeSampleBuffer (edge: flags, scan, pack), the engine's
-//             AliasFreeHardShadows on its sampleCount() samples, resolve() with their states. Nothing is read back, queried, allocated
-//             or thrown per frame: misuse returns a Status.
+//             AliasFreeHardShadows on its sampleCount() samples, resolve() with their states.
+//             Nothing is read back, queried, allocated or thrown per frame: misuse returns a Status.
 //   equals:   the CPU twin (aaFootprintsCpu, provableEdgeStencilCpu with the same options; casters
 //             not culled) bit for bit where fp64 + - * / sqrt are correctly rounded (llvmpipe) and
 //             no list entry overflowed (readStatus()[PENUMBRA_AA_STATUS_LIST_OVERFLOW] == 0; an

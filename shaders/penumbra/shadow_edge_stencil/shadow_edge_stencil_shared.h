@@ -31,11 +31,11 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_BINDING_COUNTS 5       // uint [W * H + 1]: footprints per light texel, then offsets (scan)
 #define PENUMBRA_AA_BINDING_CURSOR 6       // uint [W * H]: scatter cursors
 #define PENUMBRA_AA_BINDING_LIST 7         // uint [list capacity]: pixel ids per light texel
-#define PENUMBRA_AA_BINDING_OUT_POSITIONS 4  // sample-buffer kernel: vec4 [P * (1 + N)]
-#define PENUMBRA_AA_BINDING_OUT_NORMALS 5    // sample-buffer kernel: vec4 [P * (1 + N)]
+#define PENUMBRA_AA_BINDING_OUT_POSITIONS 4  // sample-buffer kernel: vec4 [sampleCount(mode, budget)]
+#define PENUMBRA_AA_BINDING_OUT_NORMALS 5    // sample-buffer kernel: vec4 [sampleCount(mode, budget)]
 #define PENUMBRA_AA_BINDING_STATES 4         // resolve kernel: uint states of the hard pipeline
 #define PENUMBRA_AA_BINDING_VISIBLE 5        // resolve kernel: float [P]
-#define PENUMBRA_AA_BINDING_RANKS 6          // ranks, sample-buffer and resolve kernels: uint [P + 1], edge mode: flagged pixels before each (exclusive scan)
+#define PENUMBRA_AA_BINDING_RANKS 6          // ranks, sample-buffer, resolve: uint [P + 1], flagged pixels before each
 // The Chebyshev stencil's moment map (moments.* and chebyshev.comp.glsl):
 #define PENUMBRA_AA_BINDING_MIN_DEPTH 4      // uint [W * H]: ordered bits of the least float depth (atomicMin)
 #define PENUMBRA_AA_BINDING_MIN_COVER 5      // uint [W * H]: ordered bits of the least cover value
