@@ -741,6 +741,105 @@ TEST_CASE("on-demand masks: peak bytes below R * N / 8 with many unshadowed rece
             umbra, " in full umbra)");
 }
 
+TEST_CASE("a receiver hierarchy of many SAH subtrees: the same bits and work for 1, 2 and 3 threads") {
+    // 40 000 receivers: the halving levels leave dozens of SAH subtrees, built concurrently and
+    // appended in a fixed order, so the tree (and every work counter) must not depend on threads.
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const Mesh mesh = toMesh(scene.merged());
+    const penumbra::Light light = lightsOf(scene)[0].second;
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 32;
+    sample_options.sets = 4;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    const std::vector<dvec3> receivers = surfacePoints(mesh, 40000, penumbra::test::testSeed(7));
+    penumbra::PenumbraCastingOptions options;
+    options.threads = 1;
+    const penumbra::PenumbraCastingResult one = cast(mesh, receivers, light, sets, options);
+    for (unsigned threads : {2u, 3u}) {
+        INFO(threads << " threads");
+        options.threads = threads;
+        const penumbra::PenumbraCastingResult r = cast(mesh, receivers, light, sets, options);
+        CHECK(r.blocked == one.blocked);
+        CHECK(r.ties == one.ties);
+        CHECK(r.stats.nodes_visited == one.stats.nodes_visited);
+        CHECK(r.stats.pairs_tested == one.stats.pairs_tested);
+        CHECK(r.stats.pairs_certified == one.stats.pairs_certified);
+        CHECK(r.stats.umbra_skips == one.stats.umbra_skips);
+        CHECK(r.stats.rebuilds == one.stats.rebuilds);
+    }
+    // Spot check against the oracle: every 97th receiver.
+    std::vector<dvec3> some;
+    std::vector<uint32_t> some_sets;
+    std::vector<size_t> ids;
+    for (size_t r = 0; r < receivers.size(); r += 97) {
+        some.push_back(receivers[r]);
+        some_sets.push_back(one.receiver_sets[r]);
+        ids.push_back(r);
+    }
+    const penumbra::reference::VisibilityOracle oracle(mesh.positions, mesh.indices);
+    const penumbra::reference::VisibilityResult truth = oracleTruth(oracle, some, some_sets, sets);
+    size_t mismatched = 0;
+    for (size_t k = 0; k < ids.size(); ++k)
+        for (size_t w = 0; w < one.words_per_receiver; ++w) {
+            const uint32_t tie = truth.ties[k * truth.words_per_receiver + w];
+            mismatched += ((one.blocked[ids[k] * one.words_per_receiver + w] ^ truth.blocked[k * truth.words_per_receiver + w]) &
+                           ~tie) != 0;
+        }
+    CHECK(mismatched == 0);
+}
+
+TEST_CASE("finish into a reused result: every field equals a fresh result's") {
+    const penumbra::scene::Scene big_scene = penumbra::scene::hairball(3000, 5);
+    const Mesh big = toMesh(big_scene.merged());
+    const penumbra::Light big_light = lightsOf(big_scene)[2].second;
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = 128;
+    sample_options.sets = 8;
+    const penumbra::LightSampleSets big_sets = penumbra::makeLightSampleSets(big_light, sample_options);
+    const penumbra::scene::Scene small_scene = penumbra::scene::torusKnot(24);
+    const Mesh small = toMesh(small_scene.merged());
+    const penumbra::Light small_light = lightsOf(small_scene)[0].second;
+    sample_options.count = 64;
+    sample_options.sets = 4;
+    const penumbra::LightSampleSets small_sets = penumbra::makeLightSampleSets(small_light, sample_options);
+    const std::vector<dvec3> big_receivers = surfacePoints(big, 3000, penumbra::test::testSeed(8));
+    const std::vector<dvec3> small_receivers = surfacePoints(small, 1200, penumbra::test::testSeed(9));
+
+    // A result full of another cast's bits (more receivers, more samples, umbra words of ones),
+    // then a smaller and a same-sized cast into it.
+    penumbra::PenumbraCastingResult reused = cast(big, big_receivers, big_light, big_sets);
+    REQUIRE(reused.stats.pairs_certified_hits > 0);
+    const auto castInto = [](penumbra::PenumbraCastingResult& out, const Mesh& mesh, const std::vector<dvec3>& receivers,
+                             const penumbra::Light& light, const penumbra::LightSampleSets& sets) {
+        size_t t = 0;
+        penumbra::penumbraCast(out, receivers, light, sets, [&](dvec3& a, dvec3& b, dvec3& c) {
+            if (t == mesh.triangles()) return false;
+            a = mesh.positions[mesh.indices[3 * t]];
+            b = mesh.positions[mesh.indices[3 * t + 1]];
+            c = mesh.positions[mesh.indices[3 * t + 2]];
+            ++t;
+            return true;
+        });
+    };
+    const auto same = [](const penumbra::PenumbraCastingResult& a, const penumbra::PenumbraCastingResult& b) {
+        CHECK(a.samples == b.samples);
+        CHECK(a.words_per_receiver == b.words_per_receiver);
+        CHECK(a.receiver_sets == b.receiver_sets);
+        CHECK(a.blocked == b.blocked);
+        CHECK(a.ties == b.ties);
+        CHECK(a.stats.ties == b.stats.ties);
+        CHECK(a.stats.pairs_certified == b.stats.pairs_certified);
+        CHECK(a.stats.nodes_visited == b.stats.nodes_visited);
+        CHECK(a.stats.mask_bytes_full == b.stats.mask_bytes_full);
+    };
+    const penumbra::PenumbraCastingResult fresh_small = cast(small, small_receivers, small_light, small_sets);
+    castInto(reused, small, small_receivers, small_light, small_sets);
+    same(reused, fresh_small);
+    const penumbra::PenumbraCastingResult fresh_big = cast(big, big_receivers, big_light, big_sets);
+    castInto(reused, big, big_receivers, big_light, big_sets);
+    same(reused, fresh_big);
+}
+
 TEST_CASE("degenerate blockers: zero area dropped and counted, NaN / Inf rejected naming the value") {
     penumbra::Light light;
     light.center = dvec3(0.0, 3.0, 0.0);

@@ -864,40 +864,62 @@ public:
 
     /// Processes the buffered triangles and returns the result; the caster is spent afterwards.
     PenumbraCastingResult finish() {
+        PenumbraCastingResult result;
+        finish(result);
+        return result;
+    }
+
+    /// The same, into `result`, whose vectors keep their storage: a caller that casts every frame
+    /// passes last frame's result and allocates (and first-touches) none of its R N / 16 bytes
+    /// again. Every field is overwritten.
+    void finish(PenumbraCastingResult& result) {
         PENUMBRA_CHECK(!finished_, "PenumbraCaster::finish: called twice");
         flush();
         finished_ = true;
-        PenumbraCastingResult result;
+        result.stats = {};
         result.samples = n_;
         result.words_per_receiver = words_;
         result.receiver_sets = receiver_sets_;
         const size_t r_count = receivers_.size();
-        result.blocked.assign(r_count * words_, 0u);
-        result.ties.assign(r_count * words_, 0u);
-        for (size_t r = 0; r < r_count; ++r) {
-            uint32_t* blocked = result.blocked.data() + r * words_;
-            uint32_t* ties = result.ties.data() + r * words_;
-            const State& st = state_[r];
-            if (st.full) {
-                std::fill(blocked, blocked + words_, 0xffffffffu);
-                continue;
-            }
-            for (size_t w = 0; w < words_; ++w) {
-                const uint32_t robust = st.robust ? st.robust[w] : 0u;
-                const uint32_t weak_hit = st.weak ? st.weak[w] : 0u;
-                const uint32_t fragile = st.weak ? st.weak[words_ + w] : 0u;
-                blocked[w] = robust | weak_hit;
-                ties[w] = fragile & ~robust;
-                stats_.ties += detail::oracle::popcount32(ties[w]);
-            }
-        }
+        result.blocked.resize(r_count * words_);
+        result.ties.resize(r_count * words_);
+        // Every word is written below, by blocks of receivers on every thread.
+        constexpr size_t kBlock = 4096;
+        const size_t blocks = (r_count + kBlock - 1) / kBlock;
+        std::vector<uint64_t> block_ties(blocks, 0);
+        std::atomic<bool> stop{false};
+        parallelFor(
+            blocks,
+            [&](size_t block, Worker&) {
+                uint64_t tie_count = 0;
+                for (size_t r = block * kBlock; r < std::min(r_count, (block + 1) * kBlock); ++r) {
+                    uint32_t* blocked = result.blocked.data() + r * words_;
+                    uint32_t* ties = result.ties.data() + r * words_;
+                    const State& st = state_[r];
+                    if (st.full) {
+                        std::fill(blocked, blocked + words_, 0xffffffffu);
+                        std::fill(ties, ties + words_, 0u);
+                        continue;
+                    }
+                    for (size_t w = 0; w < words_; ++w) {
+                        const uint32_t robust = st.robust ? st.robust[w] : 0u;
+                        const uint32_t weak_hit = st.weak ? st.weak[w] : 0u;
+                        const uint32_t fragile = st.weak ? st.weak[words_ + w] : 0u;
+                        blocked[w] = robust | weak_hit;
+                        ties[w] = fragile & ~robust;
+                        tie_count += detail::oracle::popcount32(ties[w]);
+                    }
+                }
+                block_ties[block] = tie_count;
+            },
+            [](size_t) { return true; }, stop);
+        for (uint64_t t : block_ties) stats_.ties += t;
         stats_.mask_bytes_peak = mask_bytes_peak_.load();
         stats_.cancelled = cancelled_;
         stats_.groups = groups_;
         result.stats = stats_;
         releaseMasks();
         if (options_.progress && !cancelled_) options_.progress(1.0);
-        return result;
     }
 
 private:
@@ -912,8 +934,21 @@ private:
         std::unique_ptr<uint32_t[]> weak;
         bool full = false;  // full-umbra bit: every pair robustly blocked
     };
+    /// Scratch of one SAH subtree build.
+    struct SahScratch {
+        std::vector<uint32_t> sorted[3];  // the subtree's points by (coordinate, index) per axis
+        std::vector<uint32_t> partition;
+        std::vector<double> right_area;
+        std::vector<uint8_t> left;  // per receiver: on the left of the current split
+    };
+    /// A subtree below the halving threshold: its root node, its range of order_ and its bounds.
+    struct SahTask {
+        uint32_t node, begin, end;
+        glm::dvec3 lo, hi;
+    };
     /// Scratch of one thread: lazily built volumes of the current (subtree, triangle).
     struct Worker {
+        SahScratch sah;
         std::vector<detail::casting::Volume> group_volume;
         std::vector<double> group_gap;
         std::vector<uint64_t> group_stamp;
@@ -979,10 +1014,6 @@ private:
         // Certified fast path: per receiver, upper bounds of |s - p|_2 and |s - p|_inf over every
         // sample (the light's box is convex and holds every sample within its slack), and the
         // samples of each (set, group) as coordinate arrays in members_ order.
-        reach2_.resize(r_count);
-        reach_inf_.resize(r_count);
-        for (size_t r = 0; r < r_count; ++r)
-            dc::sampleReach(light_poly_.vertices, light_poly_.slack, receivers_[r], reach2_[r], reach_inf_[r]);
         member_offset_.assign(members_.size() + 1, 0);
         max_members_ = 0;
         for (size_t slot = 0; slot < members_.size(); ++slot) {
@@ -1028,6 +1059,16 @@ private:
             w->scores.assign(2 * max_members_, 0.0);
             workers_.push_back(std::move(w));
         }
+        reach2_.resize(r_count);
+        reach_inf_.resize(r_count);
+        std::atomic<bool> stop{false};
+        parallelFor(
+            (r_count + 4095) / 4096,
+            [&](size_t block, Worker&) {
+                for (size_t r = block * 4096; r < std::min(r_count, (block + 1) * 4096); ++r)
+                    dc::sampleReach(light_poly_.vertices, light_poly_.slack, receivers_[r], reach2_[r], reach_inf_[r]);
+            },
+            [](size_t) { return true; }, stop);
         std::vector<uint32_t> all(r_count);
         std::iota(all.begin(), all.end(), 0u);
         buildTree(std::move(all));
@@ -1159,7 +1200,27 @@ private:
         if (order_.empty()) return;
         nodes_.reserve(2 * (order_.size() / std::max<uint32_t>(1u, options_.leaf_size)) + 2);
         nodes_.push_back(detail::casting::Node{});
+        sah_tasks_.clear();
         buildNode(0, 0, static_cast<uint32_t>(order_.size()));
+        // The SAH subtrees on every thread, each into its own nodes, then appended in task order
+        // (the same tree for any thread count).
+        std::vector<std::vector<detail::casting::Node>> subtrees(sah_tasks_.size());
+        std::atomic<bool> stop{false};
+        parallelFor(
+            sah_tasks_.size(), [&](size_t t, Worker& w) { buildSah(sah_tasks_[t], w.sah, subtrees[t]); },
+            [](size_t) { return true; }, stop);
+        for (size_t t = 0; t < sah_tasks_.size(); ++t) {
+            const std::vector<detail::casting::Node>& local = subtrees[t];
+            const uint32_t base = static_cast<uint32_t>(nodes_.size()) - 1;  // local index i >= 1 -> base + i
+            for (size_t i = 0; i < local.size(); ++i) {
+                detail::casting::Node node = local[i];
+                if (node.count == 0) node.first += base;
+                if (i == 0)
+                    nodes_[sah_tasks_[t].node] = node;
+                else
+                    nodes_.push_back(node);
+            }
+        }
         node_umbra_.assign(nodes_.size() * group_words_, 0ull);
         if (options_.umbra_bits) initUmbra(0);
         // Subtrees for the threads: a breadth-first frontier of >= kRootTarget nodes (or all leaves).
@@ -1216,38 +1277,9 @@ private:
                 std::nth_element(first, order_.begin() + mid, last, byAxis(longest));
             }
         } else {
-            // SAH: sorted sweep on each axis; cost = area(left) * n_left + area(right) * n_right.
-            double best_cost = std::numeric_limits<double>::infinity();
-            int best_axis = -1;
-            uint32_t best_split = 0;
-            std::vector<uint32_t> sorted(first, last);
-            std::vector<double> right_area(count);
-            for (int axis = 0; axis < 3; ++axis) {
-                std::sort(sorted.begin(), sorted.end(), byAxis(axis));
-                glm::dvec3 rlo(std::numeric_limits<double>::infinity()), rhi(-std::numeric_limits<double>::infinity());
-                for (uint32_t i = count; i-- > 1;) {
-                    rlo = glm::min(rlo, receivers_[sorted[i]]);
-                    rhi = glm::max(rhi, receivers_[sorted[i]]);
-                    right_area[i] = halfArea(rlo, rhi);
-                }
-                glm::dvec3 llo(std::numeric_limits<double>::infinity()), lhi(-std::numeric_limits<double>::infinity());
-                for (uint32_t i = 1; i < count; ++i) {
-                    llo = glm::min(llo, receivers_[sorted[i - 1]]);
-                    lhi = glm::max(lhi, receivers_[sorted[i - 1]]);
-                    const double cost = halfArea(llo, lhi) * i + right_area[i] * (count - i);
-                    if (cost < best_cost) {
-                        best_cost = cost;
-                        best_axis = axis;
-                        best_split = i;
-                    }
-                }
-            }
-            if (best_axis < 0 || !(best_cost > 0.0)) {  // coincident / collinear points: median
-                best_axis = longest;
-                best_split = count / 2;
-            }
-            std::sort(first, last, byAxis(best_axis));
-            mid = begin + best_split;
+            // SAH below the halving threshold: the range sorted once per axis, then split recursively.
+            sah_tasks_.push_back({node_index, begin, end, lo, hi});  // built in parallel by buildTree
+            return;
         }
         const uint32_t left = static_cast<uint32_t>(nodes_.size());
         nodes_.push_back(detail::casting::Node{});
@@ -1256,6 +1288,100 @@ private:
         nodes_[node_index].count = 0;
         buildNode(left, begin, mid);
         buildNode(left + 1, mid, end);
+    }
+
+    /// SAH subtree over order_[begin, end) with bounds lo / hi (laine2005 §3.2 below 1K points).
+    /// Each axis's order is sorted once, by (coordinate, index), and partitioned stably at every
+    /// split, so every node sees its points exactly as sorting them again would give: the sweep,
+    /// the chosen split and the tree are those of a full sort per node, in O(n log n) overall.
+    void buildSah(const SahTask& task, SahScratch& s, std::vector<detail::casting::Node>& nodes) {
+        const uint32_t count = task.end - task.begin;
+        for (int axis = 0; axis < 3; ++axis) {
+            s.sorted[axis].assign(order_.begin() + task.begin, order_.begin() + task.end);
+            std::sort(s.sorted[axis].begin(), s.sorted[axis].end(), [this, axis](uint32_t x, uint32_t y) {
+                return std::make_pair(receivers_[x][axis], x) < std::make_pair(receivers_[y][axis], y);
+            });
+        }
+        s.right_area.resize(count);
+        s.partition.resize(count);
+        if (s.left.size() < receivers_.size()) s.left.resize(receivers_.size());
+        nodes.assign(1, detail::casting::Node{});
+        sahNode(s, nodes, 0, task.begin, 0, count, task.lo, task.hi);
+    }
+
+    /// One SAH node: its points are sah_.sorted[a][first, first + count) on every axis a and
+    /// order_[begin, begin + count) as a set; leaves keep their parent's order, as before.
+    /// Writes order_[begin, begin + count) only, so subtrees can be built concurrently.
+    void sahNode(SahScratch& s, std::vector<detail::casting::Node>& nodes, uint32_t node_index, uint32_t begin,
+                 uint32_t first, uint32_t count, const glm::dvec3& lo, const glm::dvec3& hi) {
+        nodes[node_index].lo = lo;
+        nodes[node_index].hi = hi;
+        if (count <= options_.leaf_size) {
+            nodes[node_index].first = begin;
+            nodes[node_index].count = count;
+            return;
+        }
+        // Cost = area(left) * n_left + area(right) * n_right, over every split of every axis.
+        double best_cost = std::numeric_limits<double>::infinity();
+        int best_axis = -1;
+        uint32_t best_split = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            const uint32_t* sorted = s.sorted[axis].data() + first;
+            glm::dvec3 rlo(std::numeric_limits<double>::infinity()), rhi(-std::numeric_limits<double>::infinity());
+            for (uint32_t i = count; i-- > 1;) {
+                rlo = glm::min(rlo, receivers_[sorted[i]]);
+                rhi = glm::max(rhi, receivers_[sorted[i]]);
+                s.right_area[i] = halfArea(rlo, rhi);
+            }
+            glm::dvec3 llo(std::numeric_limits<double>::infinity()), lhi(-std::numeric_limits<double>::infinity());
+            for (uint32_t i = 1; i < count; ++i) {
+                llo = glm::min(llo, receivers_[sorted[i - 1]]);
+                lhi = glm::max(lhi, receivers_[sorted[i - 1]]);
+                const double cost = halfArea(llo, lhi) * i + s.right_area[i] * (count - i);
+                if (cost < best_cost) {
+                    best_cost = cost;
+                    best_axis = axis;
+                    best_split = i;
+                }
+            }
+        }
+        if (best_axis < 0 || !(best_cost > 0.0)) {  // coincident / collinear points: median
+            const glm::dvec3 extent = hi - lo;
+            best_axis = 0;
+            if (extent.y > extent[best_axis]) best_axis = 1;
+            if (extent.z > extent[best_axis]) best_axis = 2;
+            best_split = count / 2;
+        }
+        // This node's order is the chosen axis's; the other axes split stably by side.
+        const uint32_t* chosen = s.sorted[best_axis].data() + first;
+        std::copy(chosen, chosen + count, order_.begin() + begin);
+        for (uint32_t i = 0; i < count; ++i) s.left[chosen[i]] = i < best_split ? 1 : 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            if (axis == best_axis) continue;
+            uint32_t* sorted = s.sorted[axis].data() + first;
+            uint32_t l = 0, r = best_split;
+            for (uint32_t i = 0; i < count; ++i) s.partition[s.left[sorted[i]] ? l++ : r++] = sorted[i];
+            std::copy(s.partition.begin(), s.partition.begin() + count, sorted);
+        }
+        glm::dvec3 llo(std::numeric_limits<double>::infinity()), lhi(-std::numeric_limits<double>::infinity());
+        glm::dvec3 rlo = llo, rhi = lhi;
+        for (uint32_t i = 0; i < count; ++i) {
+            const glm::dvec3& p = receivers_[chosen[i]];
+            if (i < best_split) {
+                llo = glm::min(llo, p);
+                lhi = glm::max(lhi, p);
+            } else {
+                rlo = glm::min(rlo, p);
+                rhi = glm::max(rhi, p);
+            }
+        }
+        const uint32_t left = static_cast<uint32_t>(nodes.size());
+        nodes.push_back(detail::casting::Node{});
+        nodes.push_back(detail::casting::Node{});
+        nodes[node_index].first = left;
+        nodes[node_index].count = 0;
+        sahNode(s, nodes, left, begin, first, best_split, llo, lhi);
+        sahNode(s, nodes, left + 1, begin + best_split, first + best_split, count - best_split, rlo, rhi);
     }
 
     void initUmbra(uint32_t node_index) {
@@ -1822,6 +1948,7 @@ private:
     std::atomic<uint64_t> mask_bytes_{0}, mask_bytes_peak_{0};
 
     std::vector<detail::casting::Node> nodes_;
+    std::vector<SahTask> sah_tasks_;  // SAH subtrees of the current build
     std::vector<uint64_t> node_umbra_;  // [node * group_words + w]
     std::vector<uint32_t> order_;       // receivers in leaf order
     std::vector<uint32_t> roots_;
@@ -1842,10 +1969,21 @@ template <class Next>
 PenumbraCastingResult penumbraCast(std::vector<glm::dvec3> receivers, const Light& light, const LightSampleSets& sets,
                                    Next&& next, PenumbraCastingOptions options = {},
                                    std::vector<uint32_t> receiver_sets = {}) {
+    PenumbraCastingResult result;
+    penumbraCast(result, std::move(receivers), light, sets, std::forward<Next>(next), std::move(options),
+                 std::move(receiver_sets));
+    return result;
+}
+
+/// The same, into `result` (its storage reused: see PenumbraCaster::finish(result)).
+template <class Next>
+void penumbraCast(PenumbraCastingResult& result, std::vector<glm::dvec3> receivers, const Light& light,
+                  const LightSampleSets& sets, Next&& next, PenumbraCastingOptions options = {},
+                  std::vector<uint32_t> receiver_sets = {}) {
     PenumbraCaster caster(std::move(receivers), light, sets, std::move(options), std::move(receiver_sets));
     glm::dvec3 a, b, c;
     while (!caster.cancelled() && next(a, b, c)) caster.addTriangle(a, b, c);
-    return caster.finish();
+    caster.finish(result);
 }
 
 }  // namespace penumbra
