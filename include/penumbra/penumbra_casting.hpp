@@ -19,6 +19,8 @@
 //       penumbra::PenumbraCaster caster(receivers, light, sets);
 //       for (each triangle a, b, c of the scene, streamed) caster.addTriangle(a, b, c);
 //       const penumbra::PenumbraCastingResult shadow = caster.finish();
+//       // Every frame: caster.finish(last_result) (or penumbraCast(last_result, ...)) writes into
+//       // last frame's result and allocates none of its R N / 16 bytes of bits again.
 //       // shadow.visibleFraction(r), or the bits of receiver r against sets.worldSet(shadow.receiver_sets[r]).
 //
 // ---------------------------------------------------------------------------------------------
@@ -39,7 +41,10 @@
 // The algorithm (laine2005 §3.2-3.3):
 //   - Receiver BVH: axis-aligned boxes; nodes above 1024 points are split at the middle of their
 //     box's longest axis (median when that leaves a side empty), smaller ones at the SAH-best
-//     position (sorted sweep over the three axes); leaves hold <= options.leaf_size points.
+//     position (sorted sweep over the three axes; each SAH subtree sorts its points once per axis
+//     and splits the sorted orders stably, so every node sees the order a fresh sort would give,
+//     and the subtrees are built on every thread and appended in a fixed order: the same tree
+//     for any thread count); leaves hold <= options.leaf_size points.
 //   - Light-sample groups: the K * N samples are partitioned spatially (recursive median splits
 //     in the light's frame) into G = ceil(N / group_size) regions; group k of set j = the samples
 //     of set j in region k (about group_size of them). Each region's bounding polygon (planar
