@@ -4,8 +4,9 @@
 // eye rays cross its boundary instead of ray marching through the fog.
 //
 // Integration summary
-//   Needs:    GLM and the C++17 standard library; no GL. (The GPU tessellator, the airlight render
-//             and shaders/penumbra/light_volume/ build on the same setup and are the next steps.)
+//   Needs:    GLM and the C++17 standard library; no GL. The GPU tessellator (bit for bit the CPU
+//             twin's mesh on llvmpipe) is penumbra/gl/light_volume.hpp with the compute shaders in
+//             shaders/penumbra/light_volume/; lightVolumeParams() is its constants block.
 //   Input:    the light's shadow map: R x R post-projective depths in [0, 1] (GL's window depth,
 //             texel (x, y) at depth[y * R + x], 1 = nothing hit before the far plane), R a power of
 //             two in [2, kLightVolumeMaxResolution]; the light's view-projection matrix.
@@ -13,7 +14,7 @@
 //             lightVolumeCornerDepths(): the (R + 1)^2 lattice depths the volume is displaced to;
 //             tessellateLightVolume(): the CPU tessellator — the triangle list of the closed volume,
 //             vertices as packed lattice coordinates (x | y << 16) or kLightVolumeApex;
-//             lightVolumePosition(): a vertex in world space; lightVolumeStats() counts.
+//             lightVolumePosition(): a vertex in world space.
 //
 // Lattice. The volume's floor is a height field over the (R + 1) x (R + 1) texel corners: corner
 // (i, j) sits at NDC (2i/R - 1, 2j/R - 1). Its depth is interpolated from the texels separably, in
@@ -54,7 +55,14 @@
 #ifndef PENUMBRA_LIGHT_VOLUME_HPP
 #define PENUMBRA_LIGHT_VOLUME_HPP
 
-#include <penumbra/error.hpp>
+#include "penumbra/detail/shared.hpp"
+#if defined(__has_include) && __has_include(<penumbra/light_volume/light_volume_shared.h>)
+#include <penumbra/light_volume/light_volume_shared.h>
+#else
+#include "../../shaders/penumbra/light_volume/light_volume_shared.h"
+#endif
+
+#include "penumbra/error.hpp"
 
 #include <glm/glm.hpp>
 
@@ -62,12 +70,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace penumbra {
 
 /// Largest shadow map the tessellator takes: lattice coordinates pack into 16 bits each.
-inline constexpr uint32_t kLightVolumeMaxResolution = 16384;
+inline constexpr uint32_t kLightVolumeMaxResolution = 16384;  // levels 0 .. 14 < PENUMBRA_LV_MAX_LEVELS
 /// The packed vertex that stands for the light's position (the volume's apex).
 inline constexpr uint32_t kLightVolumeApex = 0xffffffffu;
 
@@ -110,6 +119,35 @@ inline LightVolumeSetup lightVolumeSetup(uint32_t resolution, const LightVolumeO
     setup.max_floor_triangles = 2ull * resolution * resolution;
     setup.max_side_triangles = 4ull * resolution;
     return setup;
+}
+
+using LightVolumeParams = shared::PenumbraLightVolumeParams;
+static_assert(sizeof(LightVolumeParams) == 112, "light_volume_shared.h: PenumbraLightVolumeParams is 112 bytes in std140");
+static_assert(PENUMBRA_LV_APEX == 0xffffffffu, "light_volume_shared.h and kLightVolumeApex agree");
+
+/// First cell of level k in the GPU's flag and item order (levels coarsest first, row-major).
+inline uint64_t lightVolumeLevelOffset(const LightVolumeSetup& setup, uint32_t k) {
+    uint64_t offset = 0;
+    for (uint32_t level = setup.levels; level > k; --level) offset += uint64_t(setup.resolution >> level) * (setup.resolution >> level);
+    return offset;
+}
+/// Cells of every level (k = 0 .. L).
+inline uint64_t lightVolumeCells(const LightVolumeSetup& setup) { return lightVolumeLevelOffset(setup, 0) + uint64_t(setup.resolution) * setup.resolution; }
+
+/// The constants block of the GPU passes at level k (pure setup: the host uploads one per level).
+inline LightVolumeParams lightVolumeParams(const LightVolumeSetup& setup, uint32_t k) {
+    LightVolumeParams p{};
+    p.size = shared::uvec4(setup.resolution, setup.levels, k, setup.options.tessellation == LightVolumeTessellation::Static ? 1u : 0u);
+    const uint64_t cells = lightVolumeCells(setup);
+    p.counts = shared::uvec4(static_cast<uint32_t>(cells), static_cast<uint32_t>(cells + 4ull * setup.resolution),
+                             static_cast<uint32_t>(uint64_t(setup.resolution >> k) * (setup.resolution >> k)), 0u);
+    uint64_t bits = 0;
+    static_assert(sizeof(bits) == sizeof(setup.options.flatness), "double is 64 bits");
+    std::memcpy(&bits, &setup.options.flatness, sizeof(bits));
+    p.flatness = shared::uvec4(static_cast<uint32_t>(bits), static_cast<uint32_t>(bits >> 32), 0u, 0u);
+    for (uint32_t level = 0; level <= setup.levels; ++level)
+        p.level_offset[level / 4][level % 4] = static_cast<uint32_t>(lightVolumeLevelOffset(setup, level));
+    return p;
 }
 
 /// Packs lattice corner (i, j), 0 <= i, j <= R, into a vertex.

@@ -1,0 +1,258 @@
+// penumbra — the quadtree light-volume tessellator (billeter2010) on the GPU. The rules, the pure
+// setup and the CPU twin are penumbra/light_volume.hpp; this header runs them with compute shaders
+// and the scan block (no geometry shader, no transform feedback: see below).
+//
+// Integration summary
+//   needs:    GL 4.5 with fp64 in shaders; PENUMBRA_GL_HEADER; the light's shadow map as a depth
+//             (or R32F) texture of R x R texels, R = setup.resolution (read with texelFetch through
+//             the tessellator's own sampler, so the texture's compare mode does not matter).
+//   produces: triangles() (uint[3 * setup.maxTriangles()]: 3 packed vertices per triangle, x | y << 16
+//             on the (R + 1)^2 lattice or PENUMBRA_LV_APEX, outward, the floor first, in the CPU
+//             twin's order), corners() (float[(R + 1)^2]: the lattice depths), indirect()
+//             (DrawArraysIndirectCommand {3 T, 1, 0, 0}, then the floor's triangle count and T): a
+//             vertex shader that fetches triangles()[gl_VertexID] and unprojects it draws the volume
+//             with one glDrawArraysIndirect.
+//   per frame: tessellate() — (1) lattice depths, (2) flatness flags of every level (each lattice
+//             point tests the cells whose closed square holds it), (3) per level: restriction of the
+//             level below, closure into this one, (4) triangles per item (cells of every level, then
+//             4 R border segments), (5) exclusive scan, (6) emission at the scanned offsets, (7) the
+//             draw command. Nothing is allocated, queried, read back or thrown per frame.
+//   equals:   tessellateLightVolume (and lightVolumeCornerDepths) bit for bit where float and double
+//             + - * / are correctly rounded and not fused (llvmpipe; `precise` forbids the fusing):
+//             the same lattice depths, flags, triangles and order.
+//   state:    tessellate() binds its programs, the params uniform range (binding 1), storage
+//             bindings 0-4 and what the scanner binds, the depth texture and the tessellator's
+//             sampler on texture unit 0; restores none of them. Ends with
+//             GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT.
+//
+// What compute + scan changes against the seed's geometry shader + transform feedback: the seed
+// walks the quadtree top-down, one geometry-shader pass per level, each level's output fed back as
+// the next one's input, so its output order depends on the driver's primitive order and its size is
+// known only on the CPU after a query. Here every level's flags are computed data-parallel, the
+// emission is one pass whose output offsets come from a scan, so the mesh is deterministic (the CPU
+// twin's order), its size stays on the GPU (the indirect command), and no pass waits on the CPU.
+#ifndef PENUMBRA_GL_LIGHT_VOLUME_HPP
+#define PENUMBRA_GL_LIGHT_VOLUME_HPP
+
+#include "penumbra/buffer_range.hpp"
+#include "penumbra/detail/dispatch.hpp"
+#include "penumbra/gl/gl.hpp"
+#include "penumbra/gl/objects.hpp"
+#include "penumbra/gl/scan.hpp"
+#include "penumbra/gl/shader.hpp"
+#include "penumbra/light_volume.hpp"
+
+#include <chrono>
+#include <cstddef>
+#include <vector>
+
+namespace penumbra::gl {
+
+/// GPU time of the tessellator's stages (enableStageTimers(); stageTimes() reads them back: for
+/// tools and benchmarks, not for the frame), milliseconds. edge_map: lattice depths + flatness flags
+/// (the seed's Laplacian + edge map); tessellate: restriction, counts, scan, emission, command.
+struct LightVolumeStageTimes {
+    double edge_map = 0, tessellate = 0;
+    double total() const { return edge_map + tessellate; }
+};
+
+class LightVolumeTessellator {
+public:
+    /// Load time: buffers for setup.maxTriangles() triangles and the programs. Throws penumbra::Error
+    /// when the triangle buffer would exceed the driver's shader-storage block size.
+    explicit LightVolumeTessellator(const LightVolumeSetup& setup, const ShaderLibrary& library = ShaderLibrary::embedded())
+        : setup_(setup), scanner_(ScanOptions{}, library) {
+        const uint32_t r = setup.resolution;
+        PENUMBRA_CHECK(r >= 2 && (r & (r - 1)) == 0 && (1u << setup.levels) == r,
+                       "LightVolumeTessellator: the setup is not from lightVolumeSetup (R = ", r, ")");
+        cells_ = lightVolumeCells(setup);
+        items_ = cells_ + 4ull * r;
+        GLint64 max_block = 0;
+        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+        const uint64_t triangle_bytes = 12ull * setup.maxTriangles();
+        PENUMBRA_CHECK(triangle_bytes <= static_cast<uint64_t>(max_block) && 4ull * (items_ + 1) <= static_cast<uint64_t>(max_block),
+                       "LightVolumeTessellator: a ", r, "^2 shadow map needs a triangle buffer of ", triangle_bytes,
+                       " bytes, over the driver's shader-storage block size of ", max_block, " bytes");
+        corners_ = Buffer(4ull * (r + 1) * (r + 1));
+        flags_ = Buffer(4ull * cells_);
+        counts_ = Buffer(4ull * (items_ + 1));
+        triangles_ = Buffer(triangle_bytes);
+        indirect_ = Buffer(32);
+        GLint alignment = 256;
+        glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &alignment);
+        ubo_stride_ = static_cast<uint32_t>((sizeof(LightVolumeParams) + alignment - 1) / alignment * alignment);
+        std::vector<uint8_t> staging(static_cast<size_t>(ubo_stride_) * (setup.levels + 1), 0);
+        for (uint32_t k = 0; k <= setup.levels; ++k) {
+            const LightVolumeParams p = lightVolumeParams(setup, k);
+            std::memcpy(staging.data() + static_cast<size_t>(k) * ubo_stride_, &p, sizeof(p));
+        }
+        params_ = Buffer(staging.size(), staging.data());
+        scanner_.reserve(items_ + 1);
+
+        corners_program_ = buildComputeProgram("penumbra/light_volume/corners.comp.glsl", {}, library);
+        deviation_program_ = buildComputeProgram("penumbra/light_volume/deviation.comp.glsl", {}, library);
+        for (int pass = 0; pass < 2; ++pass) {
+            const ShaderDefines d = {{"PENUMBRA_LV_PASS", std::to_string(pass)}};
+            restrict_program_[pass] = buildComputeProgram("penumbra/light_volume/restrict.comp.glsl", d, library);
+            emit_program_[pass] = buildComputeProgram("penumbra/light_volume/emit.comp.glsl", d, library);
+        }
+        indirect_program_ = buildComputeProgram("penumbra/light_volume/indirect.comp.glsl", {}, library);
+        glCreateSamplers(1, &sampler_);
+        glSamplerParameteri(sampler_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glSamplerParameteri(sampler_, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glSamplerParameteri(sampler_, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+        glSamplerParameteri(sampler_, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glSamplerParameteri(sampler_, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    }
+    LightVolumeTessellator(const LightVolumeTessellator&) = delete;
+    LightVolumeTessellator& operator=(const LightVolumeTessellator&) = delete;
+    ~LightVolumeTessellator() {
+        if (sampler_) glDeleteSamplers(1, &sampler_);
+        if (queries_[0]) glDeleteQueries(2, queries_);
+    }
+
+    /// Load time: bracket the two stages with GL_TIME_ELAPSED queries, or (wall_clock: drivers whose
+    /// queries do not measure durations, e.g. llvmpipe) with glFinish + the wall clock, which
+    /// synchronises the frame: a tool's setting, never an engine's.
+    void enableStageTimers(bool wall_clock = false) {
+        if (!queries_[0]) glCreateQueries(GL_TIME_ELAPSED, 2, queries_);
+        wall_clock_ = wall_clock;
+    }
+    /// Read-back of the last tessellation's stage times (waits for the GPU).
+    LightVolumeStageTimes stageTimes() const {
+        LightVolumeStageTimes t;
+        if (!queries_[0]) return t;
+        if (wall_clock_) {
+            t.edge_map = wall_ms_[0];
+            t.tessellate = wall_ms_[1];
+            return t;
+        }
+        GLuint64 ns[2] = {0, 0};
+        for (int i = 0; i < 2; ++i) glGetQueryObjectui64v(queries_[i], GL_QUERY_RESULT, &ns[i]);
+        t.edge_map = double(ns[0]) * 1e-6;
+        t.tessellate = double(ns[1]) * 1e-6;
+        return t;
+    }
+
+    const LightVolumeSetup& setup() const { return setup_; }
+    BufferRange triangles() const { return {triangles_.id(), 0, triangles_.size()}; }
+    BufferRange corners() const { return {corners_.id(), 0, corners_.size()}; }
+    BufferRange indirect() const { return {indirect_.id(), 0, indirect_.size()}; }
+    BufferRange flags() const { return {flags_.id(), 0, flags_.size()}; }
+
+    /// Tessellates the light volume of `depth_texture` (R x R, see the summary). Per-frame contract:
+    /// no allocation, no query, no read-back, no throw.
+    void tessellate(GLuint depth_texture) {
+        const uint32_t r = setup_.resolution, levels = setup_.levels;
+        const uint32_t zero = 0;
+        beginStage(0);
+        glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glBindTextureUnit(PENUMBRA_LV_DEPTH_UNIT, depth_texture);
+        glBindSampler(PENUMBRA_LV_DEPTH_UNIT, sampler_);
+        bindAll(0);
+        const uint64_t lattice = uint64_t(r + 1) * (r + 1);
+        dispatch(corners_program_, lattice);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        dispatch(deviation_program_, lattice);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        endStage();
+        beginStage(1);
+        for (uint32_t k = 1; k <= levels; ++k) {
+            if (k >= 2) {
+                bindLevel(k - 1);
+                dispatch(restrict_program_[0], uint64_t(r >> (k - 1)) * (r >> (k - 1)));
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            }
+            bindLevel(k);
+            dispatch(restrict_program_[1], uint64_t(r >> k) * (r >> k));
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        bindLevel(0);
+        dispatch(emit_program_[0], items_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        const BufferRange counts{counts_.id(), 0, counts_.size()};
+        scanner_.scan(ScanKind::Exclusive, counts, counts, items_ + 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT);
+        bindAll(0);  // the scan used bindings of its own
+        dispatch(emit_program_[1], items_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glUseProgram(indirect_program_.id());
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        endStage();
+    }
+
+    /// Read-backs (tests and tools only): the mesh as the CPU twin returns it, the lattice depths.
+    LightVolumeMesh readMesh() const {
+        uint32_t command[8];
+        glGetNamedBufferSubData(indirect_.id(), 0, sizeof(command), command);
+        LightVolumeMesh mesh;
+        mesh.resolution = setup_.resolution;
+        mesh.floor_triangles = command[4];
+        mesh.triangles.resize(3ull * command[5]);
+        if (!mesh.triangles.empty())
+            glGetNamedBufferSubData(triangles_.id(), 0, static_cast<GLsizeiptr>(4 * mesh.triangles.size()), mesh.triangles.data());
+        return mesh;
+    }
+    std::vector<float> readCorners() const {
+        std::vector<float> corners(static_cast<size_t>(setup_.resolution + 1) * (setup_.resolution + 1));
+        glGetNamedBufferSubData(corners_.id(), 0, static_cast<GLsizeiptr>(4 * corners.size()), corners.data());
+        return corners;
+    }
+
+private:
+    void bindLevel(uint32_t k) {
+        glBindBufferRange(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(k) * ubo_stride_,
+                          sizeof(LightVolumeParams));
+    }
+    void bindAll(uint32_t k) {
+        bindLevel(k);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_FLAGS, flags_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_COUNTS, counts_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles_.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_INDIRECT, indirect_.id());
+    }
+    void dispatch(const Program& program, uint64_t invocations) {
+        if (invocations == 0) return;
+        const auto grid = ::penumbra::detail::foldDispatch(::penumbra::detail::divUp(invocations, PENUMBRA_LV_GROUP_SIZE));
+        glUseProgram(program.id());
+        glDispatchCompute(grid.x, grid.y, 1);
+    }
+    void beginStage(int stage) {
+        if (!queries_[0]) return;
+        if (wall_clock_) {
+            glFinish();
+            stage_start_ = std::chrono::steady_clock::now();
+        } else {
+            glBeginQuery(GL_TIME_ELAPSED, queries_[stage]);
+        }
+        stage_ = stage;
+    }
+    void endStage() {
+        if (!queries_[0]) return;
+        if (wall_clock_) {
+            glFinish();
+            wall_ms_[stage_] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stage_start_).count();
+        } else {
+            glEndQuery(GL_TIME_ELAPSED);
+        }
+    }
+
+    LightVolumeSetup setup_;
+    Scanner scanner_;
+    uint64_t cells_ = 0, items_ = 0;
+    uint32_t ubo_stride_ = 256;
+    Buffer corners_, flags_, counts_, triangles_, indirect_, params_;
+    Program corners_program_, deviation_program_, restrict_program_[2], emit_program_[2], indirect_program_;
+    GLuint sampler_ = 0;
+    GLuint queries_[2] = {0, 0};
+    bool wall_clock_ = false;
+    int stage_ = 0;
+    double wall_ms_[2] = {0, 0};
+    std::chrono::steady_clock::time_point stage_start_{};
+};
+
+}  // namespace penumbra::gl
+
+#endif

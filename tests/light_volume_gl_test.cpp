@@ -1,0 +1,183 @@
+// GPU light-volume tessellator (penumbra/gl/light_volume.hpp) against its CPU twin: the same lattice
+// depths and the same triangles in the same order, bit for bit on drivers whose float and double
+// operations are correctly rounded and unfused (llvmpipe); on other drivers the mesh is still
+// required to be closed (the watertight checks of light_volume_test on the GPU's mesh).
+#include <penumbra/gl/light_volume.hpp>
+#include <penumbra/light_volume.hpp>
+
+#include "support/alloc_counter.hpp"
+#include "support/gl_audit.hpp"
+#include "support/gl_test_support.hpp"
+#include "support/light_volume_maps.hpp"
+#include "support/test_support.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cstring>
+#include <map>
+#include <memory>
+#include <tuple>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using penumbra::LightVolumeMesh;
+using penumbra::LightVolumeOptions;
+using penumbra::LightVolumeSetup;
+using penumbra::LightVolumeTessellation;
+
+/// The shadow map as the engine would have it: a 32-bit float depth texture.
+struct DepthTexture {
+    GLuint id = 0;
+    DepthTexture(uint32_t r, const std::vector<float>& depth) {
+        glCreateTextures(GL_TEXTURE_2D, 1, &id);
+        glTextureStorage2D(id, 1, GL_DEPTH_COMPONENT32F, static_cast<GLsizei>(r), static_cast<GLsizei>(r));
+        glTextureSubImage2D(id, 0, 0, 0, static_cast<GLsizei>(r), static_cast<GLsizei>(r), GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+        // A shadow sampler's settings on the texture itself: the tessellator's sampler overrides them.
+        glTextureParameteri(id, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+        glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    }
+    ~DepthTexture() { glDeleteTextures(1, &id); }
+    DepthTexture(const DepthTexture&) = delete;
+    DepthTexture& operator=(const DepthTexture&) = delete;
+};
+
+/// Tessellators by (R, flatness, mode): programs and buffers are load-time objects, reused.
+penumbra::gl::LightVolumeTessellator& tessellator(const LightVolumeSetup& setup) {
+    static std::map<std::tuple<uint32_t, double, int>, std::unique_ptr<penumbra::gl::LightVolumeTessellator>> cache;
+    auto& slot = cache[{setup.resolution, setup.options.flatness, int(setup.options.tessellation)}];
+    if (!slot) slot = std::make_unique<penumbra::gl::LightVolumeTessellator>(setup);
+    return *slot;
+}
+
+uint64_t closedEdgesMismatch(const LightVolumeMesh& mesh) {
+    std::map<uint64_t, int> edges;
+    for (size_t t = 0; t + 2 < mesh.triangles.size(); t += 3)
+        for (int e = 0; e < 3; ++e) ++edges[(uint64_t(mesh.triangles[t + e]) << 32) | mesh.triangles[t + (e + 1) % 3]];
+    uint64_t bad = 0;
+    for (const auto& [key, count] : edges) {
+        const auto twin = edges.find((key << 32) | (key >> 32));
+        bad += count != 1 || twin == edges.end() || twin->second != 1;
+    }
+    return bad;
+}
+
+/// GPU vs CPU on one map; returns the GPU's triangle count.
+uint64_t compare(const std::string& what, const LightVolumeSetup& setup, const std::vector<float>& depth, bool exact_driver) {
+    INFO(what << ", R = " << setup.resolution << ", flatness = " << setup.options.flatness
+              << (setup.options.tessellation == LightVolumeTessellation::Static ? ", static" : ", adaptive"));
+    const std::vector<float> corners = penumbra::lightVolumeCornerDepths(setup, depth);
+    const LightVolumeMesh cpu = penumbra::tessellateLightVolume(setup, corners);
+    DepthTexture texture(setup.resolution, depth);
+    penumbra::gl::LightVolumeTessellator& gpu = tessellator(setup);
+    gpu.tessellate(texture.id);
+    const LightVolumeMesh mesh = gpu.readMesh();
+    const std::vector<float> gpu_corners = gpu.readCorners();
+    CHECK(closedEdgesMismatch(mesh) == 0);
+    uint32_t command[4];
+    glGetNamedBufferSubData(gpu.indirect().buffer, 0, sizeof(command), command);
+    CHECK(command[0] == mesh.triangles.size());
+    CHECK(command[1] == 1u);
+    if (exact_driver) {
+        CHECK(std::memcmp(gpu_corners.data(), corners.data(), 4 * corners.size()) == 0);
+        CHECK(mesh.floor_triangles == cpu.floor_triangles);
+        REQUIRE(mesh.triangles.size() == cpu.triangles.size());
+        size_t first_difference = mesh.triangles.size();
+        for (size_t i = 0; i < mesh.triangles.size() && first_difference == mesh.triangles.size(); ++i)
+            if (mesh.triangles[i] != cpu.triangles[i]) first_difference = i;
+        INFO("first differing vertex word " << first_difference);
+        CHECK(first_difference == mesh.triangles.size());
+    }
+    return mesh.triangleCount();
+}
+
+LightVolumeSetup setupOf(uint32_t r, double flatness, LightVolumeTessellation mode = LightVolumeTessellation::Adaptive) {
+    LightVolumeOptions options;
+    options.flatness = flatness;
+    options.tessellation = mode;
+    return penumbra::lightVolumeSetup(r, options);
+}
+
+}  // namespace
+
+TEST_CASE("GPU light-volume tessellator == CPU twin: planes, saddles, random maps, static and adaptive") {
+    const bool exact = penumbra::test::rendererRoundsCorrectly(penumbra::test::context().renderer());
+    const uint32_t seed = penumbra::test::testSeed(21);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    uint64_t maps = 0;
+    for (uint32_t r : {2u, 4u, 8u, 32u, 128u}) {
+        for (int trial = 0; trial < 8; ++trial) {
+            std::vector<float> depth(size_t(r) * r);
+            const int kind = trial % 4;
+            std::vector<glm::vec3> discs(1 + rng() % 4);
+            for (glm::vec3& d : discs) d = glm::vec3(unit(rng) * r, unit(rng) * r, 1.0f + unit(rng) * r / 4.0f);
+            for (uint32_t y = 0; y < r; ++y) {
+                for (uint32_t x = 0; x < r; ++x) {
+                    float value = 0.25f + float(x) * 0x1p-13f + float(y) * 0x1p-14f;  // an exact plane
+                    if (kind == 1)
+                        for (const glm::vec3& d : discs)
+                            if (glm::length(glm::vec2(x + 0.5f, y + 0.5f) - glm::vec2(d)) < d.z) value = 0.2f;
+                    if (kind == 2) value = 0.5f + (float(x) - r / 2.0f) * (float(y) - r / 2.0f) * 0x1p-16f;
+                    if (kind == 3) value = unit(rng);
+                    depth[size_t(y) * r + x] = value;
+                }
+            }
+            const double flatness = trial < 4 ? 0.0 : std::pow(10.0, -2.0 - 4.0 * unit(rng));
+            compare("kind " + std::to_string(kind), setupOf(r, flatness), depth, exact);
+            ++maps;
+        }
+        std::vector<float> depth(size_t(r) * r, 1.0f);
+        compare("static, depth 1", setupOf(r, 0.0, LightVolumeTessellation::Static), depth, exact);
+    }
+    MESSAGE("seed ", seed, ": ", maps, " random maps, GPU == CPU", std::string(exact ? " bit for bit" : " (closed; this driver is not exact)"));
+}
+
+TEST_CASE("GPU light-volume tessellator == CPU twin on the built-in scenes' shadow maps (256^2, columns 1024^2)") {
+    const bool exact = penumbra::test::rendererRoundsCorrectly(penumbra::test::context().renderer());
+    for (const char* name : {"torus_knot", "columns", "hairball", "grass"}) {
+        const penumbra::test::SceneMap map = penumbra::test::sceneMap(name, 256);
+        const uint64_t adaptive = compare(name, setupOf(256, 1e-6), map.depth, exact);
+        const uint64_t fixed = compare(name, setupOf(256, 0.0, LightVolumeTessellation::Static), map.depth, exact);
+        MESSAGE(std::string(name), " 256^2: GPU adaptive (flatness 1e-6) ", adaptive, " triangles, static ", fixed);
+    }
+    const penumbra::test::SceneMap columns = penumbra::test::sceneMap("columns", 1024);
+    compare("columns", setupOf(1024, 1e-6), columns.depth, exact);
+}
+
+TEST_CASE("light-volume tessellator: per-frame contract (no query, read-back, wait or allocation) and load-time errors") {
+    penumbra::test::context();
+    const LightVolumeSetup setup = setupOf(64, 1e-6);
+    std::vector<float> depth(64 * 64);
+    for (size_t t = 0; t < depth.size(); ++t) depth[t] = (t % 7 == 0) ? 0.3f : 0.8f;
+    DepthTexture texture(64, depth);
+    penumbra::gl::LightVolumeTessellator gpu(setup);
+    gpu.tessellate(texture.id);  // warm-up: lazy driver compiles, first-use state
+    glFinish();
+    penumbra::test::GlAudit audit;
+    penumbra::test::AllocationCounter heap;
+    audit.start();
+    heap.start();
+    gpu.tessellate(texture.id);
+    heap.stop();
+    audit.stop();
+    INFO(audit.report());
+    CHECK(audit.calls() > 0);
+    CHECK(audit.queries() == 0);
+    CHECK(audit.errorChecks() == 0);
+    CHECK(audit.readBacks() == 0);
+    CHECK(audit.maps() == 0);
+    CHECK(audit.syncWaits() == 0);
+    CHECK(heap.allocations() == 0);
+    glBindBuffer(0xDEADu, 0);  // an engine's queued error survives tessellate()
+    gpu.tessellate(texture.id);
+    CHECK(glGetError() == GL_INVALID_ENUM);
+    CHECK(gpu.readMesh().triangles == penumbra::tessellateLightVolume(setup, penumbra::lightVolumeCornerDepths(setup, depth)).triangles);
+
+    // A setup not made by lightVolumeSetup is refused by name.
+    LightVolumeSetup bad;
+    bad.resolution = 48;
+    CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeTessellator{bad}, doctest::Contains("R = 48"), penumbra::Error);
+}
