@@ -14,7 +14,8 @@
 //             lightVolumeCornerDepths(): the (R + 1)^2 lattice depths the volume is displaced to;
 //             tessellateLightVolume(): the CPU tessellator — the triangle list of the closed volume,
 //             vertices as packed lattice coordinates (x | y << 16) or kLightVolumeApex;
-//             lightVolumePosition(): a vertex in world space.
+//             lightVolumePosition(): a vertex in world space; lightVolumeFloorError(): the
+//             floor's largest deviation from the lattice depths (the static mesh's surface).
 //
 // Lattice. The volume's floor is a height field over the (R + 1) x (R + 1) texel corners: corner
 // (i, j) sits at NDC (2i/R - 1, 2j/R - 1). Its depth is interpolated from the texels separably, in
@@ -369,6 +370,39 @@ inline LightVolumeMesh tessellateLightVolume(const LightVolumeSetup& setup, cons
         y += s;
     }
     return mesh;
+}
+
+/// Largest |floor - lattice depth| over every lattice point (the floor's triangles interpolated in
+/// double): 0 for the static mesh, <= 2 * flatness for the adaptive one (header comment). For
+/// tools and benchmarks; O(R^2).
+inline double lightVolumeFloorError(const LightVolumeMesh& mesh, const std::vector<float>& corners) {
+    const int64_t n = int64_t(mesh.resolution) + 1;
+    double worst = 0.0;
+    for (uint64_t t = 0; t < mesh.floor_triangles; ++t) {
+        const uint32_t* v = mesh.triangles.data() + 3 * t;
+        int64_t x[3], y[3];
+        double d[3];
+        for (int k = 0; k < 3; ++k) {
+            x[k] = lightVolumeI(v[k]);
+            y[k] = lightVolumeJ(v[k]);
+            d[k] = corners[static_cast<size_t>(y[k] * n + x[k])];
+        }
+        const int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+        if (area == 0) continue;
+        for (int64_t py = std::min({y[0], y[1], y[2]}); py <= std::max({y[0], y[1], y[2]}); ++py) {
+            for (int64_t px = std::min({x[0], x[1], x[2]}); px <= std::max({x[0], x[1], x[2]}); ++px) {
+                int64_t w[3];
+                for (int k = 0; k < 3; ++k) {
+                    const int a = (k + 1) % 3, b = (k + 2) % 3;
+                    w[k] = (x[b] - x[a]) * (py - y[a]) - (px - x[a]) * (y[b] - y[a]);
+                }
+                if (area > 0 ? (w[0] < 0 || w[1] < 0 || w[2] < 0) : (w[0] > 0 || w[1] > 0 || w[2] > 0)) continue;
+                const double value = (double(w[0]) * d[0] + double(w[1]) * d[1] + double(w[2]) * d[2]) / double(area);
+                worst = std::max(worst, std::abs(value - double(corners[static_cast<size_t>(py * n + px)])));
+            }
+        }
+    }
+    return worst;
 }
 
 /// A packed vertex in world space: lattice corner (i, j) at NDC (2i/R - 1, 2j/R - 1, 2 depth - 1)
