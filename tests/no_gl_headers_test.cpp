@@ -2,17 +2,20 @@
 // oracle compile and run with no GL header anywhere in the translation unit — this target has no
 // GL loader on its include path, and a GL header slipping in is an #error. (The conservative
 // raster header has its own, stricter test: conservative_raster_no_gl_test.)
+#include <penumbra/airlight.hpp>
 #include <penumbra/bent_normals.hpp>
 #include <penumbra/buffer_range.hpp>
 #include <penumbra/deep_shadow_map.hpp>
 #include <penumbra/influence_region.hpp>
 #include <penumbra/light_lut.hpp>
+#include <penumbra/light_volume.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/penumbra_casting.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/pipelines/sample_based_soft.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
+#include <penumbra/reference/light_shafts.hpp>
 #include <penumbra/reference/transmittance.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/sample_lists.hpp>
