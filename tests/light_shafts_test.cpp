@@ -24,65 +24,11 @@ namespace {
 using penumbra::reference::LightVolumeRaycaster;
 using penumbra::reference::ShadowMapLookup;
 using penumbra::reference::ShadowMapView;
-
-/// A spot light looking down -y over a ground plane (depth 0.9 in its map) with a square caster
-/// (depth `caster`, 1 = none) in the middle of its R^2 map.
-struct ShaftScene {
-    uint32_t r = 64;
-    glm::dmat4 view_projection, inverse;
-    glm::dvec3 light{0.0, 4.0, 0.0};
-    std::vector<float> depth;
-};
-
-ShaftScene shaftScene(bool caster) {
-    ShaftScene s;
-    const glm::dmat4 view = glm::lookAt(s.light, glm::dvec3(0.0), glm::dvec3(0, 0, -1));
-    s.view_projection = glm::perspective(glm::radians(60.0), 1.0, 0.5, 10.0) * view;
-    s.inverse = glm::inverse(s.view_projection);
-    s.depth.assign(size_t(s.r) * s.r, 0.0f);
-    // The ground y = 0 ray cast per texel centre (exact plane depths), the caster a square at y = 2.
-    for (uint32_t y = 0; y < s.r; ++y) {
-        for (uint32_t x = 0; x < s.r; ++x) {
-            const double nx = 2.0 * (x + 0.5) / s.r - 1.0, ny = 2.0 * (y + 0.5) / s.r - 1.0;
-            const glm::dvec4 a = s.inverse * glm::dvec4(nx, ny, -1, 1), b = s.inverse * glm::dvec4(nx, ny, 1, 1);
-            const glm::dvec3 from = glm::dvec3(a) / a.w, to = glm::dvec3(b) / b.w;
-            double plane = 0.0;
-            if (caster && x >= 24 && x < 40 && y >= 24 && y < 40) plane = 2.0;
-            const double t = (plane - from.y) / (to.y - from.y);
-            const glm::dvec4 clip = s.view_projection * glm::dvec4(from + t * (to - from), 1.0);
-            s.depth[size_t(y) * s.r + x] = float(std::clamp(0.5 * clip.z / clip.w + 0.5, 0.0, 1.0));
-        }
-    }
-    return s;
-}
-
-penumbra::AirlightSetup fog() {
-    penumbra::AirlightMedium medium;
-    medium.sigma_s = 0.08;
-    medium.sigma_t = 0.1;
-    penumbra::AirlightOptions options;
-    options.method = penumbra::AirlightMethod::Quadrature;
-    options.quadrature_nodes = 32;
-    return penumbra::airlightSetup(medium, 50.0, options);
-}
-
-/// Eye rays of a W x H camera at `eye` looking at `target` (45 degrees vertical).
-std::vector<glm::dvec3> rays(const glm::dvec3& eye, const glm::dvec3& target, uint32_t w, uint32_t h) {
-    const glm::dmat4 inverse = glm::inverse(glm::perspective(glm::radians(45.0), double(w) / h, 0.1, 100.0) *
-                                            glm::lookAt(eye, target, glm::dvec3(0, 1, 0)));
-    std::vector<glm::dvec3> dirs;
-    for (uint32_t y = 0; y < h; ++y)
-        for (uint32_t x = 0; x < w; ++x) {
-            const glm::dvec4 p = inverse * glm::dvec4(2.0 * (x + 0.5) / w - 1.0, 2.0 * (y + 0.5) / h - 1.0, 1.0, 1.0);
-            dirs.push_back(glm::normalize(glm::dvec3(p) / p.w - eye));
-        }
-    return dirs;
-}
-
-/// Distance along the ray to the ground y = 0 (the scene depth), or `far`.
-double groundDepth(const glm::dvec3& eye, const glm::dvec3& dir, double far) {
-    return dir.y < 0.0 ? std::min(far, -eye.y / dir.y) : far;
-}
+using penumbra::test::fog;
+using penumbra::test::groundDepth;
+using penumbra::test::rays;
+using penumbra::test::shaftScene;
+using penumbra::test::ShaftScene;
 
 }  // namespace
 

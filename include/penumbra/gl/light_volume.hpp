@@ -40,10 +40,15 @@
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/scan.hpp"
 #include "penumbra/gl/shader.hpp"
+#include "penumbra/airlight.hpp"
 #include "penumbra/light_volume.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
+#include <ios>
 #include <vector>
 
 namespace penumbra::gl {
@@ -251,6 +256,152 @@ private:
     int stage_ = 0;
     double wall_ms_[2] = {0, 0};
     std::chrono::steady_clock::time_point stage_start_{};
+};
+
+/// What one frame of the render needs besides the volume: the camera and the light, in double (the
+/// host forms every matrix relative to the eye, so the shaders' floats stay small), and the colour
+/// the airlight scales.
+struct LightVolumeView {
+    glm::dmat4 camera_view_projection{1.0};  ///< world -> the camera's clip space
+    glm::dvec3 eye{0.0};                     ///< the camera's position
+    glm::dmat4 light_view_projection{1.0};   ///< the shadow map's (the tessellated one)
+    glm::dvec3 light_position{0.0};          ///< the spot light (the volume's apex)
+    glm::vec3 colour{1.0f};                  ///< lit += colour * airlight
+};
+
+/// billeter2010's render of a tessellated light volume: every volume triangle drawn without depth
+/// test or culling into an RG32F accumulation target the renderer owns (viewport W x H), each
+/// fragment a crossing of its pixel's ray (volume.frag.glsl: entering -A(t), leaving +A(t), t
+/// clamped to the scene's depth by counting crossings behind it), then a composite that adds
+/// colour * airlight to the engine's lit image. The twin is reference::LightVolumeRaycaster.
+///   needs:   the tessellator's buffers (same frame), the camera's depth texture (W x H, window
+///            depth, 1 = background; any compare mode: read through the renderer's sampler), the
+///            engine's lit image (W x H, GL_RGBA32F or GL_RGBA16F, bound as an image).
+///   state:   render() binds its framebuffer, viewport, programs, an empty vertex array, the draw-
+///            indirect buffer, uniform binding 2, storage bindings 0 and 3, texture units 1-3 (with
+///            samplers) and image unit 0; enables blending (ONE, ONE), depth clamp, sets front faces
+///            counter-clockwise, disables depth test and culling; restores none of them. Ends with
+///            GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT.
+class LightVolumeRenderer {
+public:
+    /// Load time: the accumulation target, the airlight table texture and the programs. Throws
+    /// penumbra::Error for an empty viewport, a lit format other than GL_RGBA32F / GL_RGBA16F, or an
+    /// airlight setup without its table (AirlightMethod::Quadrature renders nothing here).
+    LightVolumeRenderer(uint32_t width, uint32_t height, const AirlightSetup& airlight, GLenum lit_format = GL_RGBA32F,
+                        const ShaderLibrary& library = ShaderLibrary::embedded())
+        : width_(width), height_(height) {
+        PENUMBRA_CHECK(width >= 1 && height >= 1 && width <= 16384 && height <= 16384, "LightVolumeRenderer: viewport ", width, "x",
+                       height, " is outside [1, 16384]");
+        PENUMBRA_CHECK(lit_format == GL_RGBA32F || lit_format == GL_RGBA16F,
+                       "LightVolumeRenderer: the lit image must be GL_RGBA32F or GL_RGBA16F (got 0x", std::hex, lit_format, ")");
+        PENUMBRA_CHECK(airlight.method == AirlightMethod::Table && !airlight.table.empty(),
+                       "LightVolumeRenderer: the airlight setup must use the table (isotropic medium); got method ",
+                       uint32_t(airlight.method));
+        medium_ = airlight.shaderMedium();
+        airlight_params_ = airlight.shaderParams();
+        table_ = Texture(GL_TEXTURE_2D);
+        glTextureStorage2D(table_.id(), 1, GL_R32F, GLsizei(airlight.tableWidth()), GLsizei(airlight.tableHeight()));
+        glTextureSubImage2D(table_.id(), 0, 0, 0, GLsizei(airlight.tableWidth()), GLsizei(airlight.tableHeight()), GL_RED, GL_FLOAT,
+                            airlight.table.data());
+        accumulation_ = Texture(GL_TEXTURE_2D);
+        glTextureStorage2D(accumulation_.id(), 1, GL_RG32F, GLsizei(width), GLsizei(height));
+        glCreateFramebuffers(1, &fbo_);
+        glNamedFramebufferTexture(fbo_, GL_COLOR_ATTACHMENT0, accumulation_.id(), 0);
+        PENUMBRA_CHECK(glCheckNamedFramebufferStatus(fbo_, GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE,
+                       "LightVolumeRenderer: the RG32F accumulation target is not renderable");
+        glCreateVertexArrays(1, &vao_);
+        glCreateSamplers(2, samplers_);
+        glSamplerParameteri(samplers_[0], GL_TEXTURE_MIN_FILTER, GL_LINEAR);  // the airlight table
+        glSamplerParameteri(samplers_[0], GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        glSamplerParameteri(samplers_[1], GL_TEXTURE_MIN_FILTER, GL_NEAREST);  // depth, accumulation
+        glSamplerParameteri(samplers_[1], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glSamplerParameteri(samplers_[1], GL_TEXTURE_COMPARE_MODE, GL_NONE);
+        for (GLuint sampler : samplers_) {
+            glSamplerParameteri(sampler, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+            glSamplerParameteri(sampler, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        }
+        params_ = Buffer(sizeof(shared::PenumbraLightVolumeRenderParams), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        volume_program_ = buildProgram({"penumbra/light_volume/volume.vert.glsl", "penumbra/light_volume/volume.frag.glsl"}, {}, library);
+        composite_program_ = buildComputeProgram("penumbra/light_volume/composite.comp.glsl",
+                                                 {{"PENUMBRA_LV_LIT_FORMAT", lit_format == GL_RGBA32F ? "rgba32f" : "rgba16f"}}, library);
+        lit_format_ = lit_format;
+    }
+    LightVolumeRenderer(const LightVolumeRenderer&) = delete;
+    LightVolumeRenderer& operator=(const LightVolumeRenderer&) = delete;
+    ~LightVolumeRenderer() {
+        if (fbo_) glDeleteFramebuffers(1, &fbo_);
+        if (vao_) glDeleteVertexArrays(1, &vao_);
+        if (samplers_[0]) glDeleteSamplers(2, samplers_);
+    }
+
+    /// A new medium or intensity (the table does not depend on them); per frame if need be.
+    void setMedium(const AirlightSetup& airlight) { medium_ = airlight.shaderMedium(); }
+    /// The accumulation target of the last render (RG32F: red = sum of clamped crossings, green =
+    /// signed count behind the scene).
+    GLuint accumulation() const { return accumulation_.id(); }
+
+    /// Draws the volume `tessellator` produced this frame and adds its airlight to `lit_texture`.
+    /// Per-frame contract: no allocation, no query, no read-back, no throw.
+    void render(const LightVolumeTessellator& tessellator, const LightVolumeView& view, GLuint scene_depth_texture,
+                GLuint lit_texture) {
+        shared::PenumbraLightVolumeRenderParams p{};
+        const glm::dmat4 to_eye = glm::translate(glm::dmat4(1.0), -view.eye);
+        const glm::dmat4 from_eye = glm::translate(glm::dmat4(1.0), view.eye);
+        p.light_to_eye = glm::mat4(to_eye * glm::inverse(view.light_view_projection));
+        const glm::dmat4 camera = view.camera_view_projection * from_eye;
+        p.camera_view_projection = glm::mat4(camera);
+        p.camera_inverse = glm::mat4(glm::inverse(camera));
+        p.light = glm::vec4(glm::vec3(view.light_position - view.eye), 0.0f);
+        p.medium = medium_;
+        p.airlight = airlight_params_;
+        p.colour = glm::vec4(view.colour, 0.0f);
+        p.size = glm::uvec4(tessellator.setup().resolution, width_, height_, 0u);
+        glNamedBufferSubData(params_.id(), 0, sizeof(p), &p);
+
+        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
+        glViewport(0, 0, GLsizei(width_), GLsizei(height_));
+        const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, zero);
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_RASTERIZER_DISCARD);
+        glEnable(GL_DEPTH_CLAMP);
+        glFrontFace(GL_CCW);
+        glEnablei(GL_BLEND, 0);
+        glBlendEquationi(0, GL_FUNC_ADD);
+        glBlendFunci(0, GL_ONE, GL_ONE);
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
+        const BufferRange corners = tessellator.corners(), triangles = tessellator.triangles(), indirect = tessellator.indirect();
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners.buffer, GLintptr(corners.offset),
+                          GLsizeiptr(corners.size));
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles.buffer, GLintptr(triangles.offset),
+                          GLsizeiptr(triangles.size));
+        glBindTextureUnit(PENUMBRA_LV_AIRLIGHT_UNIT, table_.id());
+        glBindSampler(PENUMBRA_LV_AIRLIGHT_UNIT, samplers_[0]);
+        glBindTextureUnit(PENUMBRA_LV_SCENE_DEPTH_UNIT, scene_depth_texture);
+        glBindSampler(PENUMBRA_LV_SCENE_DEPTH_UNIT, samplers_[1]);
+        glBindVertexArray(vao_);
+        glUseProgram(volume_program_.id());
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, indirect.buffer);
+        glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(static_cast<uintptr_t>(indirect.offset)));
+
+        glBindTextureUnit(PENUMBRA_LV_ACCUMULATION_UNIT, accumulation_.id());
+        glBindSampler(PENUMBRA_LV_ACCUMULATION_UNIT, samplers_[1]);
+        glBindImageTexture(PENUMBRA_LV_LIT_IMAGE, lit_texture, 0, GL_FALSE, 0, GL_READ_WRITE, lit_format_);
+        glUseProgram(composite_program_.id());
+        glDispatchCompute((width_ + 7) / 8, (height_ + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+    }
+
+private:
+    uint32_t width_ = 0, height_ = 0;
+    GLenum lit_format_ = GL_RGBA32F;
+    glm::vec4 medium_{0.0f}, airlight_params_{0.0f};
+    Texture table_, accumulation_;
+    GLuint fbo_ = 0, vao_ = 0;
+    GLuint samplers_[2] = {0, 0};
+    Buffer params_;
+    Program volume_program_, composite_program_;
 };
 
 }  // namespace penumbra::gl
