@@ -3,10 +3,11 @@
 //
 //   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
-//                [--mode reference|soft|hard|hpc|dsm] [--reference] [--out FILE.png] [--json] [--no-ground]
+//                [--mode reference|soft|hard|hpc|dsm|volumetric] [--reference] [--out FILE.png] [--json] [--no-ground]
 //                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--rotations R] [--grid G]
 //                [--opacity A] [--dsm-res R] [--dsm-samples S] [--tolerance E]
 //                [--aa off|edge|full] [--aa-samples 4|8|16] [--aa-stencil provable|chebyshev|chebyshev-inner]
+//                [--fog SIGMA_S,SIGMA_T] [--sm-res R] [--tessellation adaptive|static]
 //
 // Modes
 //   reference (default): every view sample's visibility of N light samples from the exact
@@ -49,6 +50,14 @@
 //       light depth minus a depth bias (kDsmBiasTexels) times the direct light. --reference
 //       compares every receiver with the exact transmittance to the light's centre
 //       (penumbra/reference/transmittance.hpp; JSON reference.rmse, max_error, compared, ties).
+//   volumetric: light shafts in fog (billeter2010 light volumes): a spot light at the scene's light
+//       framing the casters, its R x R shadow map (--sm-res, 1024) tessellated into a closed light
+//       volume on the GPU (--tessellation adaptive: quadtree, flatness 1e-6; static: 2 R^2
+//       triangles) and drawn over the camera's depth, each crossing adding or subtracting the
+//       airlight of a homogeneous medium (--fog SIGMA_S,SIGMA_T; isotropic, sun2005's closed form
+//       as a table) clamped to the scene; writes <out> and <out>_airlight.png. --reference: the
+//       ray march of the same shadow map (512 steps, every pixel; JSON reference.rmse) and with
+//       exact visibility (256 steps, every 4th pixel each way; reference.rmse_oracle).
 //
 // Before any work: the arguments are parsed (CLI11) and checked (checkArgs: values, which flags
 // the mode uses, the output path: extension .png, folder writable) and the memory the image
@@ -72,12 +81,14 @@
 #include <penumbra/gl/deep_shadow_map.hpp>
 #include <penumbra/gl/headless.hpp>
 #include <penumbra/gl/light_lut.hpp>
+#include <penumbra/gl/light_volume.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
 #include <penumbra/gl/shadow_edge_stencil.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/penumbra_casting.hpp>
 #include <penumbra/reference/compare.hpp>
+#include <penumbra/reference/light_shafts.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/gl_scene.hpp>
@@ -151,6 +162,9 @@ struct Args {
     std::string aa = "off";              // hard mode: eye-view anti-aliasing (galoppo2010): off | edge | full
     uint32_t aa_samples = 4;             // ... N sub-samples per multi-sampled pixel: 4 | 8 | 16 (rotated grid)
     std::string aa_stencil = "provable"; // ... which stencil picks the pixels of --aa edge: provable | chebyshev | chebyshev-inner
+    double fog_sigma_s = 0.05, fog_sigma_t = 0.08;  // volumetric mode: the medium (scattering, extinction)
+    uint32_t sm_res = 1024;              // volumetric mode: the spot light's shadow map, R x R
+    std::string tessellation = "adaptive";  // volumetric mode: adaptive | static light-volume tessellation
     bool skip(const char* name) const { return std::find(skip_list.begin(), skip_list.end(), name) != skip_list.end(); }
 };
 
@@ -174,6 +188,7 @@ struct RawArgs {
     std::string lut_res = "64", sets = "4", grid = "256", rotations = "8";
     std::string opacity = "0.5", dsm_res = "256", dsm_samples = "16", tolerance = "0";
     std::string aa_samples = "4";
+    std::string fog = "0.05,0.08", sm_res = "1024";
     bool no_ground = false;
 };
 
@@ -199,7 +214,10 @@ struct ModeFlag {
     bool dsm;        // used by --mode dsm
     const char* why_not;
     const char* dsm_why_not = nullptr;  // the reason given to --mode dsm, when why_not does not fit it
+    bool volumetric = false;            // used by --mode volumetric
 };
+const char* const kVolumetricOnly = "only --mode volumetric renders light shafts";
+const char* const kVolumetricWhyNot = "light shafts come from a spot light at the scene's light, a point, and its shadow map";
 // --reference in hard mode checks the GPU against the oracle at the light's centre only, so it
 // uses neither the light samples nor the radius. --mode dsm sees the light as a point too.
 const char* const kDsmPointLight = "a deep shadow map sees the light as a point, its centre";
@@ -209,7 +227,7 @@ const ModeFlag kModeFlags[] = {
     {"--samples", true, false, true, true, false, "hard shadows use one light point, the light's centre",
      "a deep shadow map takes its sub-samples per texel from --dsm-samples"},
     {"--light-radius", true, false, true, true, false, "hard shadows use one light point, the light's centre", kDsmPointLight},
-    {"--reference", false, true, true, true, true, "reference mode is the oracle already"},
+    {"--reference", false, true, true, true, true, "reference mode is the oracle already", nullptr, true},
     {"--view-samples", false, true, true, false, false, "reference, hpc and dsm modes trace exact primary rays on the CPU"},
     {"--frames", true, false, true, false, false, "hard shadows use one light point: there is nothing to accumulate; hpc renders one frame",
      "a deep shadow map is one deterministic frame"},
@@ -232,6 +250,9 @@ const ModeFlag kModeFlags[] = {
     {"--aa", false, true, false, false, false, kAaOnly},
     {"--aa-samples", false, true, false, false, false, kAaOnly},
     {"--aa-stencil", false, true, false, false, false, kAaOnly},
+    {"--fog", false, false, false, false, false, kVolumetricOnly, nullptr, true},
+    {"--sm-res", false, false, false, false, false, kVolumetricOnly, nullptr, true},
+    {"--tessellation", false, false, false, false, false, kVolumetricOnly, nullptr, true},
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
@@ -252,7 +273,7 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
                    "casting on the CPU; hard: GPU alias-free "
                    "hard shadows; dsm: deep shadow map of semi-transparent casters")
         ->type_name("MODE")
-        ->check(CLI::IsMember({"reference", "soft", "hard", "hpc", "dsm"}))
+        ->check(CLI::IsMember({"reference", "soft", "hard", "hpc", "dsm", "volumetric"}))
         ->capture_default_str();
     app.add_flag("--reference", a.reference,
                  "hard, soft, hpc and dsm modes: compare with the oracle on the same view samples (and light samples) "
@@ -325,6 +346,18 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
                    "dsm mode: opacity of every caster (every mesh but the ground), in [0, 1]: the fraction of light "
                    "each surface stops")
         ->type_name("A")
+        ->capture_default_str();
+    app.add_option("--fog", raw.fog,
+                   "volumetric mode: the homogeneous medium's scattering and extinction coefficients per world unit, "
+                   "0 < SIGMA_S <= SIGMA_T (default 0.05,0.08)")
+        ->type_name("SIGMA_S,SIGMA_T");
+    app.add_option("--sm-res", raw.sm_res, "volumetric mode: the spot light's shadow map is R x R, a power of two in 2..4096 (1024)")
+        ->type_name("R");
+    app.add_option("--tessellation", a.tessellation,
+                   "volumetric mode: the light volume's tessellation: adaptive (quadtree, flatness 1e-6) or static (2 R^2 "
+                   "triangles)")
+        ->type_name("KIND")
+        ->check(CLI::IsMember({"adaptive", "static"}))
         ->capture_default_str();
     app.add_option("--dsm-res", raw.dsm_res, "dsm mode: the deep shadow map is R x R texels, 1..4096")
         ->type_name("R")
@@ -431,10 +464,28 @@ uint32_t parseWhole(const std::string& text, const std::string& what) {
 
 void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
     const bool hard = a.mode == "hard", soft = a.mode == "soft", hpc = a.mode == "hpc", dsm = a.mode == "dsm";
+    const bool volumetric = a.mode == "volumetric";
     a.ground = !raw.no_ground;
     for (const ModeFlag& f : kModeFlags) {
-        if (app.count(f.flag) > 0 && !(hard ? f.hard : soft ? f.soft : hpc ? f.hpc : dsm ? f.dsm : f.reference))
-            usageError(f.flag, " is not used by --mode ", a.mode, " (", dsm && f.dsm_why_not ? f.dsm_why_not : f.why_not, ")");
+        if (app.count(f.flag) > 0 &&
+            !(volumetric ? f.volumetric : hard ? f.hard : soft ? f.soft : hpc ? f.hpc : dsm ? f.dsm : f.reference))
+            usageError(f.flag, " is not used by --mode ", a.mode, " (",
+                       volumetric && !f.volumetric && f.why_not != kVolumetricOnly ? kVolumetricWhyNot
+                       : dsm && f.dsm_why_not                                       ? f.dsm_why_not
+                                                                                     : f.why_not,
+                       ")");
+    }
+    if (volumetric) {
+        // --fog SIGMA_S,SIGMA_T: strtod reads nan and inf, which the range tests then name.
+        const size_t comma = raw.fog.find(',');
+        if (comma == std::string::npos || raw.fog.find(',', comma + 1) != std::string::npos)
+            usageError("--fog takes SIGMA_S,SIGMA_T (scattering, extinction per world unit), got '", raw.fog, "'");
+        a.fog_sigma_s = parseNumber(raw.fog.substr(0, comma), "--fog's SIGMA_S");
+        a.fog_sigma_t = parseNumber(raw.fog.substr(comma + 1), "--fog's SIGMA_T");
+        if (!(std::isfinite(a.fog_sigma_s) && std::isfinite(a.fog_sigma_t) && a.fog_sigma_s > 0 && a.fog_sigma_t >= a.fog_sigma_s))
+            usageError("--fog needs 0 < SIGMA_S <= SIGMA_T, both finite (extinction = scattering + absorption), got '", raw.fog, "'");
+        a.sm_res = parseCount(raw.sm_res, "--sm-res", 2, 4096);
+        if ((a.sm_res & (a.sm_res - 1)) != 0) usageError("--sm-res must be a power of two in [2, 4096], got '", raw.sm_res, "'");
     }
     const std::string samples = app.count("--samples") > 0 ? raw.samples : soft || hpc ? "128" : "64";
     a.samples = parseCount(samples, "--samples", 1, 1u << 16);
@@ -2686,6 +2737,232 @@ int runDsm(const Args& args, const penumbra::scene::Scene& scene, const penumbra
     return 0;
 }
 
+/// Volumetric mode (billeter2010): light shafts of a spot light at the scene's light in a homogeneous
+/// medium (--fog). The spot frames the casters and the ground around them (1.5x the casters' box);
+/// its R x R shadow map (--sm-res) is rasterized on the GPU, tessellated into the closed light
+/// volume (penumbra/gl/light_volume.hpp: adaptive or static), and the volume is drawn over the
+/// camera's depth (the exact primary hits) so its airlight is added to the directly lit image.
+/// --reference: per pixel the converged ray march of the same shadow map (nearest texel, 512 steps;
+/// JSON reference.rmse) and, on every 4th pixel each way, the ray march with exact visibility (the
+/// oracle, 256 steps; reference.rmse_oracle). Writes <out> and <out>_airlight.png (the airlight).
+int runVolumetric(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
+                  const MergedScene& merged, const glm::dvec3& light_pos, double load_ms,
+                  std::chrono::steady_clock::time_point t_start) {
+    const uint32_t w = args.width, h = args.height, r = args.sm_res;
+    // ---- the spot light (a bad one is exit 2, before any long work) ----
+    penumbra::scene::Bounds box;
+    for (size_t m = scene.meshes.size() > 1 && args.ground ? 1 : 0; m < scene.meshes.size(); ++m) box.extend(scene.meshes[m].bounds());
+    const glm::vec3 centre = box.center(), half = 0.75f * (box.max - box.min);
+    glm::mat4 light_vp_f;
+    try {
+        light_vp_f = penumbra::lightViewProjectionForBounds(glm::vec4(glm::vec3(light_pos), 1.0f), centre - half, centre + half);
+    } catch (const penumbra::Error& e) {
+        usageError("--mode volumetric: the spot light at the scene's light cannot frame the casters: ", e.what());
+    }
+    const glm::dmat4 light_vp(light_vp_f);
+    penumbra::AirlightMedium medium;
+    medium.sigma_s = args.fog_sigma_s;
+    medium.sigma_t = args.fog_sigma_t;
+    // Intensity: unit irradiance at the casters' centre without the medium.
+    const double intensity = glm::dot(glm::dvec3(centre) - light_pos, glm::dvec3(centre) - light_pos);
+    const penumbra::AirlightSetup airlight = penumbra::airlightSetup(medium, intensity);
+    penumbra::LightVolumeOptions volume_options;
+    volume_options.tessellation = args.tessellation == "static" ? penumbra::LightVolumeTessellation::Static
+                                                                : penumbra::LightVolumeTessellation::Adaptive;
+    volume_options.flatness = 1e-6;
+    const penumbra::LightVolumeSetup volume_setup = penumbra::lightVolumeSetup(r, volume_options);
+
+    // ---- the camera's exact primary hits: the scene's distance per pixel ----
+    auto t0 = std::chrono::steady_clock::now();
+    const PrimaryHits hits = primaryHits(args, scene, oracle, merged);
+    const double primary_ms = msSince(t0);
+    const glm::dvec3 eye(scene.camera.eye);
+    const glm::dmat4 camera = glm::dmat4(scene.camera.projection(float(w) / float(h))) * glm::dmat4(scene.camera.view());
+    const size_t pixels = size_t(w) * h;
+    // GPU textures are bottom-up: texel (x, y) is image pixel (x, h - 1 - y).
+    const auto imageIndex = [&](size_t texel) { return (h - 1 - texel / w) * size_t(w) + texel % w; };
+    std::vector<float> window(pixels, 1.0f);
+    std::vector<double> distance(pixels, penumbra::kAirlightMaxDistance);
+    std::vector<glm::dvec3> dirs(pixels);
+    const glm::dmat4 inverse_camera = glm::inverse(camera);
+    for (size_t texel = 0; texel < pixels; ++texel) {
+        const size_t i = imageIndex(texel);
+        const glm::dvec4 far_point = inverse_camera * glm::dvec4(2.0 * (texel % w + 0.5) / w - 1.0, 2.0 * (texel / w + 0.5) / h - 1.0, 1.0, 1.0);
+        dirs[texel] = glm::normalize(glm::dvec3(far_point) / far_point.w - eye);
+        if (hits.pixel_sample[i] < 0) continue;
+        const glm::dvec4 clip = camera * glm::dvec4(hits.hit_point[i], 1.0);
+        window[texel] = float(0.5 * clip.z / clip.w + 0.5);
+        // The distance the GPU reconstructs from that float depth (what the references clamp to).
+        const glm::dvec4 p = inverse_camera * glm::dvec4(2.0 * (texel % w + 0.5) / w - 1.0, 2.0 * (texel / w + 0.5) / h - 1.0,
+                                                       2.0 * double(window[texel]) - 1.0, 1.0);
+        distance[texel] = glm::length(glm::dvec3(p) / p.w - eye);
+    }
+
+    // ---- GPU: shadow map, light volume, render ----
+    penumbra::gl::HeadlessContext context;
+    t0 = std::chrono::steady_clock::now();
+    const penumbra::scene::GpuScene gpu_scene(scene);
+    penumbra::scene::GBuffer shadow_map(r, r);
+    shadow_map.render(gpu_scene, light_vp_f);
+    std::vector<float> depth(size_t(r) * r);
+    glGetTextureImage(shadow_map.depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(4 * depth.size()), depth.data());
+    const double shadow_map_ms = msSince(t0);
+    penumbra::gl::LightVolumeTessellator tessellator(volume_setup);
+    tessellator.enableStageTimers(true);
+    tessellator.tessellate(shadow_map.depthTexture());
+    const penumbra::gl::LightVolumeStageTimes stages = tessellator.stageTimes();
+    const penumbra::LightVolumeMesh mesh = tessellator.readMesh();
+    penumbra::gl::Texture camera_depth(GL_TEXTURE_2D), lit(GL_TEXTURE_2D), shafts(GL_TEXTURE_2D);
+    glTextureStorage2D(camera_depth.id(), 1, GL_DEPTH_COMPONENT32F, GLsizei(w), GLsizei(h));
+    glTextureSubImage2D(camera_depth.id(), 0, 0, 0, GLsizei(w), GLsizei(h), GL_DEPTH_COMPONENT, GL_FLOAT, window.data());
+    // The directly lit image: albedo x (ambient + N.L x exact visibility of the light's centre).
+    std::vector<glm::vec4> base(pixels, glm::vec4(0.08f, 0.09f, 0.12f, 1.0f));
+    parallelFor(0, pixels, [&](size_t texel) {
+        const size_t i = imageIndex(texel);
+        if (hits.pixel_sample[i] < 0) return;
+        const glm::dvec3 p = hits.hit_point[i], to_light = light_pos - p;
+        const double lambert = std::max(0.0, glm::dot(hits.hit_normal[i], glm::normalize(to_light)));
+        glm::dvec3 tmp;
+        const bool lit_here = penumbra::reference::shadowMapProject({light_vp, r, nullptr, nullptr}, p, tmp) &&
+                              !oracle.closestHit(p, to_light, 1e-6, 1.0 - 1e-9).hit;
+        const glm::dvec3 albedo = merged.material[hits.hit_triangle[i]] ? glm::dvec3(0.85, 0.45, 0.2) : glm::dvec3(0.75, 0.75, 0.72);
+        base[texel] = glm::vec4(glm::vec3(albedo * (0.12 + 0.88 * lambert * (lit_here ? 1.0 : 0.0))), 1.0f);
+    });
+    const std::vector<glm::vec4> zeros(pixels, glm::vec4(0.0f));
+    glTextureStorage2D(lit.id(), 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    glTextureSubImage2D(lit.id(), 0, 0, 0, GLsizei(w), GLsizei(h), GL_RGBA, GL_FLOAT, base.data());
+    glTextureStorage2D(shafts.id(), 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    glTextureSubImage2D(shafts.id(), 0, 0, 0, GLsizei(w), GLsizei(h), GL_RGBA, GL_FLOAT, zeros.data());
+    penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
+    penumbra::gl::LightVolumeView view;
+    view.camera_view_projection = camera;
+    view.eye = eye;
+    view.light_view_projection = light_vp;
+    view.light_position = light_pos;
+    renderer.render(tessellator, view, camera_depth.id(), shafts.id());  // the airlight alone
+    glFinish();
+    t0 = std::chrono::steady_clock::now();
+    renderer.render(tessellator, view, camera_depth.id(), lit.id());
+    glFinish();
+    const double render_ms = msSince(t0);
+    std::vector<glm::vec4> out(pixels), air(pixels);
+    glGetTextureImage(lit.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels), out.data());
+    glGetTextureImage(shafts.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels), air.data());
+
+    // ---- --reference: ray marches ----
+    Json reference_json;
+    double reference_ms = 0.0;
+    if (args.reference) {
+        t0 = std::chrono::steady_clock::now();
+        penumbra::reference::ShadowMapView map_view;
+        map_view.view_projection = light_vp;
+        map_view.resolution = r;
+        map_view.depth = &depth;
+        std::vector<double> march(pixels, 0.0);
+        std::vector<std::pair<double, double>> interval(pixels);  // each ray's stretch inside the spot's frustum
+        for (size_t texel = 0; texel < pixels; ++texel)
+            interval[texel] = penumbra::reference::frustumInterval(map_view, eye, dirs[texel], std::min(distance[texel], 1e6));
+        {
+            Progress progress("ray march (shadow map, 512 steps)", pixels);
+            inChunks(pixels, w, progress, [&](size_t begin, size_t end) {
+                parallelFor(begin, end, [&](size_t texel) {
+                    march[texel] = penumbra::reference::rayMarchExact(
+                        eye, dirs[texel], interval[texel].first, interval[texel].second, 512,
+                        [&](const glm::dvec3& x) { return penumbra::reference::shadowMapLit(map_view, penumbra::reference::ShadowMapLookup::Nearest, x); },
+                        [&](double t) { return penumbra::airlight<double>(airlight, eye, dirs[texel], light_pos, t); });
+                });
+            });
+        }
+        std::vector<size_t> sparse;
+        for (size_t texel = 0; texel < pixels; ++texel)
+            if ((texel % w) % 4 == 0 && (texel / w) % 4 == 0) sparse.push_back(texel);
+        std::vector<double> exact(sparse.size(), 0.0);
+        {
+            Progress progress("ray march (exact visibility, 256 steps)", sparse.size());
+            inChunks(sparse.size(), 256, progress, [&](size_t begin, size_t end) {
+                parallelFor(begin, end, [&](size_t k) {
+                    const size_t texel = sparse[k];
+                    exact[k] = penumbra::reference::rayMarchExact(
+                        eye, dirs[texel], interval[texel].first, interval[texel].second, 256,
+                        [&](const glm::dvec3& x) { return penumbra::reference::oracleLit(map_view, oracle, light_pos, x); },
+                        [&](double t) { return penumbra::airlight<double>(airlight, eye, dirs[texel], light_pos, t); });
+                });
+            });
+        }
+        double squares = 0.0, peak = 0.0, squares_oracle = 0.0, squares_march_oracle = 0.0, max_error = 0.0;
+        for (size_t texel = 0; texel < pixels; ++texel) {
+            const double e = double(air[texel].r) - march[texel];
+            squares += e * e;
+            max_error = std::max(max_error, std::fabs(e));
+            peak = std::max(peak, march[texel]);
+        }
+        for (size_t k = 0; k < sparse.size(); ++k) {
+            const double e = double(air[sparse[k]].r) - exact[k], m = march[sparse[k]] - exact[k];
+            squares_oracle += e * e;
+            squares_march_oracle += m * m;
+        }
+        reference_json = {{"rmse", std::sqrt(squares / double(pixels))},
+                          {"max_error", max_error},
+                          {"rmse_oracle", std::sqrt(squares_oracle / double(sparse.size()))},
+                          {"ray_march_rmse_oracle", std::sqrt(squares_march_oracle / double(sparse.size()))},
+                          {"peak_airlight", peak},
+                          {"target", "rmse: the ray march of the same shadow map (nearest texel, 512 steps over the ray's stretch in the spot's frustum, each lit step's airlight exact) on every pixel; "
+                                     "rmse_oracle: the ray march with exact visibility (256 steps) on every 4th pixel each way"},
+                          {"oracle_pixels", sparse.size()}};
+        reference_ms = msSince(t0);
+    }
+
+    // ---- images ----
+    penumbra::scene::ImageRgb8 image = penumbra::scene::makeImageRgb8(w, h), shafts_image = penumbra::scene::makeImageRgb8(w, h);
+    double air_peak = 0.0;
+    for (const glm::vec4& a : air) air_peak = std::max(air_peak, double(a.r));
+    for (size_t texel = 0; texel < pixels; ++texel) {
+        const size_t i = imageIndex(texel);
+        for (int k = 0; k < 3; ++k) {
+            image.pixels[3 * i + k] = penumbra::scene::linearToSrgb8(out[texel][k]);
+            shafts_image.pixels[3 * i + k] = penumbra::scene::linearToSrgb8(air_peak > 0 ? float(air[texel].r / air_peak) : 0.0f);
+        }
+    }
+    penumbra::scene::writePng(args.out, image);
+    const std::string shafts_path = siblingPath(args.out, "_airlight");
+    penumbra::scene::writePng(shafts_path, shafts_image);
+    const double total_ms = msSince(t_start);
+    if (args.json) {
+        Json j = reportHead(args, "volumetric");
+        j["width"] = w;
+        j["height"] = h;
+        j["triangles"] = oracle.triangleCount();
+        j["fog"] = {{"sigma_s", args.fog_sigma_s}, {"sigma_t", args.fog_sigma_t}, {"phase", "isotropic"}, {"intensity", intensity}};
+        j["light_volume"] = {{"shadow_map", r},
+                             {"tessellation", args.tessellation},
+                             {"flatness", volume_options.flatness},
+                             {"triangles", mesh.triangleCount()},
+                             {"floor_triangles", mesh.floor_triangles},
+                             {"static_triangles", volume_setup.maxTriangles()},
+                             {"triangles_vs_static", double(mesh.triangleCount()) / double(2.0 * r * r + 4.0 * r)},
+                             {"edge_map_ms", stages.edge_map},
+                             {"tessellate_ms", stages.tessellate},
+                             {"render_ms", render_ms},
+                             {"peak_airlight", air_peak}};
+        if (args.reference) j["reference"] = reference_json;
+        j["timings_ms"] = {{"load", load_ms},      {"view_samples", primary_ms}, {"shadow_map", shadow_map_ms},
+                           {"reference", reference_ms}, {"total", total_ms}};
+        j["out"] = args.out;
+        j["airlight_out"] = shafts_path;
+        printReport(j);
+    } else {
+        std::printf("%s (volumetric, %u^2 shadow map, %s): %llu volume triangles (%.1f %% of static), render %.1f ms -> %s, %s\n",
+                    args.scene.c_str(), r, args.tessellation.c_str(), static_cast<unsigned long long>(mesh.triangleCount()),
+                    100.0 * double(mesh.triangleCount()) / double(2.0 * r * r + 4.0 * r), render_ms, args.out.c_str(),
+                    shafts_path.c_str());
+        if (args.reference)
+            std::printf("reference: airlight RMSE %.4g against the shadow-map ray march, %.4g against exact visibility (peak %.4g)\n",
+                        reference_json["rmse"].get<double>(), reference_json["rmse_oracle"].get<double>(),
+                        reference_json["peak_airlight"].get<double>());
+    }
+    return 0;
+}
+
 /// --origin: the world is the scene translated by `origin` (double). What the renderers and the
 /// oracle see is camera-relative — world minus the camera's world position, subtracted in double
 /// and rounded once to float (penumbra::relativePosition) — so float precision does not depend on
@@ -2742,6 +3019,10 @@ int main(int argc, char** argv) {
                "             the casters' bounding sphere; --dsm-res R (256) x R texels, --dsm-samples S (16) per texel,\n"
                "             --tolerance E (0 = 1/(2S)); bilinear lookup with a depth bias; --reference: RMSE and max\n"
                "             error against the exact transmittance to the light (JSON reference.rmse, max_error)\n"
+               "  volumetric light shafts in fog (billeter2010): the spot light's --sm-res R (1024) shadow map tessellated\n"
+               "             into a light volume on the GPU (--tessellation adaptive|static), drawn with the airlight of\n"
+               "             --fog SIGMA_S,SIGMA_T (0.05,0.08); --reference: RMSE against ray marching the shadow map\n"
+               "             (reference.rmse) and with exact visibility (reference.rmse_oracle); writes <out>_airlight.png\n"
                "Built-in scenes: torus_knot columns hairball grass. Progress of long phases goes to stderr.\n"
                "Exit codes: 0 done, 1 failed while running, 2 bad arguments or a run that cannot work.");
     addOptions(app, args, raw);
@@ -2762,7 +3043,8 @@ int main(int argc, char** argv) {
         glm::dvec3 light_pos = args.has_light_pos ? args.light_pos : glm::dvec3(scene.light.position);
         applyOrigin(scene, args.origin, light_pos);
         const double light_radius = args.light_radius > 0 ? args.light_radius : double(scene.light.radius);
-        if (args.mode != "hard" && args.mode != "dsm") checkLight(scene, light_pos, light_radius);  // both: a point light
+        if (args.mode != "hard" && args.mode != "dsm" && args.mode != "volumetric")
+            checkLight(scene, light_pos, light_radius);  // those three: a point light
         checkMemory(args, scene.triangleCount());
 
         const MergedScene merged = merge(scene);
@@ -2772,6 +3054,7 @@ int main(int argc, char** argv) {
         if (args.mode == "soft") return runSoft(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
         if (args.mode == "hpc") return runHpc(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
         if (args.mode == "dsm") return runDsm(args, scene, oracle, merged, light_pos, load_ms, t_start);
+        if (args.mode == "volumetric") return runVolumetric(args, scene, oracle, merged, light_pos, load_ms, t_start);
         return runReference(args, scene, oracle, merged, light_pos, light_radius, load_ms, t_start);
     } catch (const UsageError& e) {
         std::fprintf(stderr, "soft_shadows: %s\n(soft_shadows --help lists the options)\n", e.what.c_str());

@@ -1,0 +1,46 @@
+# Runs soft_shadows --mode volumetric --reference --json (ARGS: extra flags, '|'-separated): light
+# shafts from the GPU light volume (tessellator + render, billeter2010) against the converged ray
+# march of the same shadow map and the ray march with exact visibility. The JSON must hold the
+# light_volume block and reference.rmse / rmse_oracle / peak_airlight; both RMSEs must be finite and
+# below MAX_RMSE, the peak above 0, the volume at most MAX_RATIO of the static triangles; both images
+# must be PNGs. Invoked by ctest (examples/CMakeLists.txt), which says why the bounds are what they are.
+string(REPLACE "|" ";" extra "${ARGS}")
+execute_process(COMMAND "${EXE}" --mode volumetric --reference --json --out "${OUT}" ${extra}
+                RESULT_VARIABLE result OUTPUT_VARIABLE json ERROR_VARIABLE err)
+if(NOT result EQUAL 0)
+    message(FATAL_ERROR "soft_shadows failed (${result}): ${err}")
+endif()
+foreach(key shadow_map tessellation triangles floor_triangles static_triangles triangles_vs_static edge_map_ms tessellate_ms render_ms)
+    string(JSON value ERROR_VARIABLE json_error GET "${json}" light_volume ${key})
+    if(json_error)
+        message(FATAL_ERROR "JSON report lacks 'light_volume.${key}': ${json_error}\n${json}")
+    endif()
+endforeach()
+foreach(key rmse rmse_oracle peak_airlight)
+    string(JSON value ERROR_VARIABLE json_error GET "${json}" reference ${key})
+    if(json_error)
+        message(FATAL_ERROR "JSON report lacks 'reference.${key}': ${json_error}\n${json}")
+    endif()
+    # nlohmann writes NaN and infinities as null: a finite value is a plain number.
+    if(NOT "${value}" MATCHES "^[0-9]+(\\.[0-9]+)?([eE][-+]?[0-9]+)?$")
+        message(FATAL_ERROR "reference.${key} is not a finite number ('${value}'): ${json}")
+    endif()
+    set(${key} ${value})
+endforeach()
+string(JSON ratio GET "${json}" light_volume triangles_vs_static)
+if(NOT rmse LESS MAX_RMSE OR NOT rmse_oracle LESS MAX_RMSE)
+    message(FATAL_ERROR "airlight RMSE ${rmse} (shadow-map ray march) / ${rmse_oracle} (exact visibility) not below ${MAX_RMSE}: ${json}")
+endif()
+if(NOT peak_airlight GREATER 0)
+    message(FATAL_ERROR "no airlight at all (peak ${peak_airlight}): ${json}")
+endif()
+if(ratio GREATER MAX_RATIO)
+    message(FATAL_ERROR "the light volume has ${ratio} of the static triangles, above ${MAX_RATIO}: ${json}")
+endif()
+string(JSON airlight_out GET "${json}" airlight_out)
+foreach(png "${OUT}" "${airlight_out}")
+    file(READ "${png}" signature LIMIT 8 HEX)
+    if(NOT signature STREQUAL "89504e470d0a1a0a")
+        message(FATAL_ERROR "${png} is not a PNG")
+    endif()
+endforeach()
