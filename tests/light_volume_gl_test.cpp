@@ -338,6 +338,8 @@ std::vector<float> renderShafts(const penumbra::test::ShaftScene& scene, const p
     return out;
 }
 
+penumbra::reference::ShadowMapLookup ShadowMapLookupNearest() { return penumbra::reference::ShadowMapLookup::Nearest; }
+
 penumbra::AirlightSetup tableFog() {
     penumbra::AirlightMedium medium;
     medium.sigma_s = 0.08;
@@ -395,4 +397,62 @@ TEST_CASE("GPU light-volume render == its CPU twin (crossings of the volume, cla
     MESSAGE("behind a wall: max |shafts - none| ", wall_difference, "; without the wall ", open_difference);
     CHECK(open_difference > 1e-3 * peak);
     CHECK(wall_difference <= 1e-6 * peak);  // blending order only (the crossings in front are the same surfaces)
+}
+
+TEST_CASE("GPU ray-march baseline == its CPU twin (reference::rayMarchExact, nearest texel), and converges to the volume") {
+    penumbra::test::context();
+    const penumbra::test::ShaftScene scene = penumbra::test::shaftScene(true);
+    const penumbra::AirlightSetup airlight = tableFog();
+    const uint32_t w = 48, h = 36, steps = 256;
+    const glm::dvec3 eye(5.0, 1.5, 6.0), target(0.0, 1.0, 0.0);
+    const glm::dmat4 camera = penumbra::test::cameraViewProjection(eye, target, w, h);
+    const std::vector<glm::dvec3> dirs = penumbra::test::rays(eye, target, w, h);
+    std::vector<float> window(dirs.size(), 1.0f);
+    std::vector<double> used(dirs.size(), 1e18);
+    const glm::dmat4 inverse = glm::inverse(camera);
+    for (size_t i = 0; i < dirs.size(); ++i) {
+        const double ground = penumbra::test::groundDepth(eye, dirs[i], 1e9);
+        if (ground >= 1e6) continue;
+        const glm::dvec4 clip = camera * glm::dvec4(eye + ground * dirs[i], 1.0);
+        window[i] = float(0.5 * clip.z / clip.w + 0.5);
+        const glm::dvec4 p = inverse * glm::dvec4(2.0 * (i % w + 0.5) / w - 1.0, 2.0 * (i / w + 0.5) / h - 1.0, 2.0 * window[i] - 1.0, 1.0);
+        used[i] = glm::length(glm::dvec3(p) / p.w - eye);
+    }
+    DepthTexture shadow_map(scene.r, scene.depth), camera_depth(0, {}, w, h, window);
+    GLuint lit = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &lit);
+    glTextureStorage2D(lit, 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    const float zero[4] = {0, 0, 0, 0};
+    glClearTexImage(lit, 0, GL_RGBA, GL_FLOAT, zero);
+    penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
+    penumbra::gl::LightVolumeView view;
+    view.camera_view_projection = camera;
+    view.eye = eye;
+    view.light_view_projection = scene.view_projection;
+    view.light_position = scene.light;
+    renderer.rayMarch(shadow_map.id, scene.r, steps, view, camera_depth.id, lit);
+    std::vector<glm::vec4> pixels(dirs.size());
+    glGetTextureImage(lit, 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels.size()), pixels.data());
+    glDeleteTextures(1, &lit);
+    penumbra::reference::ShadowMapView map;
+    map.view_projection = scene.view_projection;
+    map.resolution = scene.r;
+    map.depth = &scene.depth;
+    std::vector<double> errors;
+    double peak = 0.0;
+    for (size_t i = 0; i < dirs.size(); ++i) {
+        const auto [t_in, t_out] = penumbra::reference::frustumInterval(map, eye, dirs[i], std::min(used[i], 1e6));
+        const double cpu = penumbra::reference::rayMarchExact(
+            eye, dirs[i], t_in, t_out, steps,
+            [&](const glm::dvec3& x) { return penumbra::reference::shadowMapLit(map, ShadowMapLookupNearest(), x); },
+            [&](double t) { return penumbra::airlight<double>(airlight, eye, dirs[i], scene.light, t); });
+        peak = std::max(peak, cpu);
+        errors.push_back(std::abs(double(pixels[i].r) - cpu));
+    }
+    std::sort(errors.begin(), errors.end());
+    const double p99 = errors[errors.size() * 99 / 100], worst = errors.back();
+    MESSAGE(w, "x", h, " pixels, ", steps, " steps: peak ", peak, ", |GPU march - CPU twin| 99th percentile ", p99, ", max ", worst);
+    CHECK(peak > 0.0);
+    CHECK(p99 <= 1e-3 * peak);
+    CHECK(worst <= 0.05 * peak);  // a step midpoint within float rounding of the shadow map's depth
 }

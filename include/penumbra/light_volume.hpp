@@ -124,7 +124,7 @@ inline LightVolumeSetup lightVolumeSetup(uint32_t resolution, const LightVolumeO
 
 using LightVolumeParams = shared::PenumbraLightVolumeParams;
 static_assert(sizeof(LightVolumeParams) == 112, "light_volume_shared.h: PenumbraLightVolumeParams is 112 bytes in std140");
-static_assert(sizeof(shared::PenumbraLightVolumeRenderParams) == 288, "light_volume_shared.h: the render block is 288 bytes in std140");
+static_assert(sizeof(shared::PenumbraLightVolumeRenderParams) == 352, "light_volume_shared.h: the render block is 352 bytes in std140");
 static_assert(PENUMBRA_LV_APEX == 0xffffffffu, "light_volume_shared.h and kLightVolumeApex agree");
 
 /// First cell of level k in the GPU's flag and item order (levels coarsest first, row-major).

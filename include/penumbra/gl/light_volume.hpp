@@ -324,6 +324,7 @@ public:
         volume_program_ = buildProgram({"penumbra/light_volume/volume.vert.glsl", "penumbra/light_volume/volume.frag.glsl"}, {}, library);
         composite_program_ = buildComputeProgram("penumbra/light_volume/composite.comp.glsl",
                                                  {{"PENUMBRA_LV_LIT_FORMAT", lit_format == GL_RGBA32F ? "rgba32f" : "rgba16f"}}, library);
+        march_program_ = buildComputeProgram("penumbra/light_volume/ray_march.comp.glsl", {{"PENUMBRA_LV_LIT_FORMAT", "rgba32f"}}, library);
         lit_format_ = lit_format;
     }
     LightVolumeRenderer(const LightVolumeRenderer&) = delete;
@@ -344,20 +345,7 @@ public:
     /// Per-frame contract: no allocation, no query, no read-back, no throw.
     void render(const LightVolumeTessellator& tessellator, const LightVolumeView& view, GLuint scene_depth_texture,
                 GLuint lit_texture) {
-        shared::PenumbraLightVolumeRenderParams p{};
-        const glm::dmat4 to_eye = glm::translate(glm::dmat4(1.0), -view.eye);
-        const glm::dmat4 from_eye = glm::translate(glm::dmat4(1.0), view.eye);
-        p.light_to_eye = glm::mat4(to_eye * glm::inverse(view.light_view_projection));
-        const glm::dmat4 camera = view.camera_view_projection * from_eye;
-        p.camera_view_projection = glm::mat4(camera);
-        p.camera_inverse = glm::mat4(glm::inverse(camera));
-        p.light = glm::vec4(glm::vec3(view.light_position - view.eye), 0.0f);
-        p.medium = medium_;
-        p.airlight = airlight_params_;
-        p.colour = glm::vec4(view.colour, 0.0f);
-        p.size = glm::uvec4(tessellator.setup().resolution, width_, height_, 0u);
-        glNamedBufferSubData(params_.id(), 0, sizeof(p), &p);
-
+        upload(view, tessellator.setup().resolution, 0);
         glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
         glViewport(0, 0, GLsizei(width_), GLsizei(height_));
         const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -393,7 +381,47 @@ public:
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
     }
 
+    /// The baseline an engine would run instead: ray march the shadow map (R x R, window depth) in
+    /// `steps` steps per pixel over its ray's stretch inside the spot's frustum and in front of the
+    /// scene, each lit step's airlight exact (ray_march.comp.glsl; twin: reference::rayMarchExact
+    /// with ShadowMapLookup::Nearest), and add colour * airlight to `lit_texture` (GL_RGBA32F).
+    /// Binds texture units 1, 2, 4 and image unit 0. Per frame: no allocation, query or read-back.
+    void rayMarch(GLuint shadow_map, uint32_t resolution, uint32_t steps, const LightVolumeView& view, GLuint scene_depth_texture,
+                  GLuint lit_texture) {
+        upload(view, resolution, steps);
+        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
+        glBindTextureUnit(PENUMBRA_LV_AIRLIGHT_UNIT, table_.id());
+        glBindSampler(PENUMBRA_LV_AIRLIGHT_UNIT, samplers_[0]);
+        glBindTextureUnit(PENUMBRA_LV_SCENE_DEPTH_UNIT, scene_depth_texture);
+        glBindSampler(PENUMBRA_LV_SCENE_DEPTH_UNIT, samplers_[1]);
+        glBindTextureUnit(PENUMBRA_LV_SHADOW_MAP_UNIT, shadow_map);
+        glBindSampler(PENUMBRA_LV_SHADOW_MAP_UNIT, samplers_[1]);
+        glBindImageTexture(PENUMBRA_LV_LIT_IMAGE, lit_texture, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glUseProgram(march_program_.id());
+        glDispatchCompute((width_ + 7) / 8, (height_ + 7) / 8, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    }
+
 private:
+    /// The constants block of one frame (matrices relative to the eye, formed in double).
+    void upload(const LightVolumeView& view, uint32_t resolution, uint32_t steps) {
+        shared::PenumbraLightVolumeRenderParams p{};
+        const glm::dmat4 to_eye = glm::translate(glm::dmat4(1.0), -view.eye);
+        const glm::dmat4 from_eye = glm::translate(glm::dmat4(1.0), view.eye);
+        p.light_to_eye = glm::mat4(to_eye * glm::inverse(view.light_view_projection));
+        const glm::dmat4 camera = view.camera_view_projection * from_eye;
+        p.camera_view_projection = glm::mat4(camera);
+        p.camera_inverse = glm::mat4(glm::inverse(camera));
+        p.eye_to_light = glm::mat4(view.light_view_projection * from_eye);
+        p.light = glm::vec4(glm::vec3(view.light_position - view.eye), 0.0f);
+        p.medium = medium_;
+        p.airlight = airlight_params_;
+        p.colour = glm::vec4(view.colour, 0.0f);
+        p.size = glm::uvec4(resolution, width_, height_, 0u);
+        p.march = glm::uvec4(steps, 0u, 0u, 0u);
+        glNamedBufferSubData(params_.id(), 0, sizeof(p), &p);
+    }
+
     uint32_t width_ = 0, height_ = 0;
     GLenum lit_format_ = GL_RGBA32F;
     glm::vec4 medium_{0.0f}, airlight_params_{0.0f};
@@ -401,7 +429,7 @@ private:
     GLuint fbo_ = 0, vao_ = 0;
     GLuint samplers_[2] = {0, 0};
     Buffer params_;
-    Program volume_program_, composite_program_;
+    Program volume_program_, composite_program_, march_program_;
 };
 
 }  // namespace penumbra::gl

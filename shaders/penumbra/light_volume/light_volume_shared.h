@@ -38,19 +38,21 @@ struct PenumbraLightVolumeParams {
 #define PENUMBRA_LV_SCENE_DEPTH_UNIT 2    // the camera's depth buffer (window depth; 1 = background)
 #define PENUMBRA_LV_ACCUMULATION_UNIT 3   // the accumulation target (RG32F) read by the composite
 #define PENUMBRA_LV_LIT_IMAGE 0           // image unit of the engine's lit image (composite)
+#define PENUMBRA_LV_SHADOW_MAP_UNIT 4     // the shadow map, for the ray-march baseline (window depth)
 
-/// The render's constants block (std140 == std430, 288 bytes). Positions are relative to the eye
+/// The render's constants block (std140 == std430, 352 bytes). Positions are relative to the eye
 /// (the airlight's float convention): the host subtracts the eye in double.
 struct PenumbraLightVolumeRenderParams {
     mat4 light_to_eye;            // lattice NDC -> position relative to the eye: translate(-eye) * inverse(light VP)
     mat4 camera_view_projection;  // (position relative to the eye, 1) -> camera clip space
     mat4 camera_inverse;          // camera NDC -> position relative to the eye (the inverse of the above)
+    mat4 eye_to_light;            // position relative to the eye -> the light's clip space (the ray march)
     vec4 light;                   // xyz: light position relative to the eye, w: 0
     vec4 medium;                  // AirlightSetup::shaderMedium (sigma_s, sigma_t, g, intensity)
     vec4 airlight;                // AirlightSetup::shaderParams (W, H, min_distance, method)
     vec4 colour;                  // rgb: the light's colour the airlight is multiplied by, w: 0
     uvec4 size;                   // x: shadow-map resolution R, y: viewport width, z: viewport height, w: 0
-    uvec4 pad;
+    uvec4 march;                  // x: ray-march steps, yzw: 0
 };
 
 #ifdef __cplusplus
