@@ -17,22 +17,34 @@
 //   err_floor_max                         lightVolumeFloorError: the floor's largest deviation from the
 //                                         static surface, post-projective depth
 //   gpu_equals_cpu                        1 when the GPU mesh equals the CPU twin's, word for word
-// Not yet here: the volume render and the ray-marching baselines (issue 12's next step).
+//   render_ms                             the volume drawn over the camera's depth and composited
+//                                         (LightVolumeRenderer::render), 256 x 192, median of 3
+//   volume_ms                             total_ms + render_ms: what a frame pays for its shafts
+//   err_rmse                              the rendered airlight against the converged ray march of
+//                                         the same shadow map (CPU, 1024 steps, each lit step exact)
+// Entries BM_LightVolumeRayMarch/<scene>/<R>/<steps>, steps = 64 | 256 | 1024: the baseline an
+// engine would run instead (LightVolumeRenderer::rayMarch, GPU), march_ms and err_rmse against the
+// same converged march. The fog: sigma_s 0.05, sigma_t 0.08, isotropic (the table).
 // PENUMBRA_BENCH_SMOKE=1: one scene at 64^2.
 #include "bench_common.hpp"
 
+#include <penumbra/airlight.hpp>
 #include <penumbra/gl/light_volume.hpp>
 #include <penumbra/light_volume.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/reference/light_shafts.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/scene.hpp>
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -44,6 +56,8 @@ using penumbra::bench::glContext;
 struct ShadowMap {
     std::unique_ptr<penumbra::scene::GBuffer> gbuffer;
     std::vector<float> depth;
+    glm::dmat4 light_view_projection{1.0};
+    glm::dvec3 light_position{0.0};
 };
 
 const ShadowMap& shadowMap(const std::string& name, uint32_t r) {
@@ -57,12 +71,140 @@ const ShadowMap& shadowMap(const std::string& name, uint32_t r) {
     const glm::vec3 centre = box.center(), half = 0.75f * (box.max - box.min);
     const glm::mat4 light = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), centre - half, centre + half);
     const penumbra::scene::GpuScene gpu_scene(scene);
+    map.light_view_projection = glm::dmat4(light);
+    map.light_position = glm::dvec3(scene.light.position);
     map.gbuffer = std::make_unique<penumbra::scene::GBuffer>(r, r);
     map.gbuffer->render(gpu_scene, light);
     map.depth.resize(size_t(r) * r);
     glGetTextureImage(map.gbuffer->depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(4 * map.depth.size()),
                       map.depth.data());
     return map;
+}
+
+constexpr uint32_t kViewWidth = 256, kViewHeight = 192;
+
+penumbra::AirlightSetup benchFog() {
+    penumbra::AirlightMedium medium;
+    medium.sigma_s = 0.05;
+    medium.sigma_t = 0.08;
+    return penumbra::airlightSetup(medium, 10.0);
+}
+
+/// The camera's depth (a G-buffer pass) and, per pixel (bottom-up), its ray and scene distance.
+struct CameraView {
+    std::unique_ptr<penumbra::scene::GBuffer> gbuffer;
+    glm::dmat4 view_projection{1.0};
+    glm::dvec3 eye{0.0};
+    std::vector<glm::dvec3> dirs;
+    std::vector<double> distance;
+};
+
+const CameraView& cameraView(const std::string& name) {
+    static std::map<std::string, CameraView> cache;
+    CameraView& v = cache[name];
+    if (v.gbuffer) return v;
+    const uint32_t w = penumbra::bench::smokeRun() ? 32 : kViewWidth, h = penumbra::bench::smokeRun() ? 24 : kViewHeight;
+    const penumbra::scene::Scene scene = penumbra::scene::builtin(name);
+    v.eye = glm::dvec3(scene.camera.eye);
+    v.view_projection = glm::dmat4(scene.camera.projection(float(w) / float(h))) * glm::dmat4(scene.camera.view());
+    const penumbra::scene::GpuScene gpu_scene(scene);
+    v.gbuffer = std::make_unique<penumbra::scene::GBuffer>(w, h);
+    v.gbuffer->render(gpu_scene, glm::mat4(v.view_projection));
+    std::vector<float> depth(size_t(w) * h);
+    glGetTextureImage(v.gbuffer->depthTexture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(4 * depth.size()), depth.data());
+    const glm::dmat4 inverse = glm::inverse(v.view_projection);
+    for (size_t i = 0; i < depth.size(); ++i) {
+        const double x = 2.0 * (i % w + 0.5) / w - 1.0, y = 2.0 * (i / w + 0.5) / h - 1.0;
+        const glm::dvec4 far_point = inverse * glm::dvec4(x, y, 1.0, 1.0);
+        v.dirs.push_back(glm::normalize(glm::dvec3(far_point) / far_point.w - v.eye));
+        const glm::dvec4 p = inverse * glm::dvec4(x, y, 2.0 * depth[i] - 1.0, 1.0);
+        v.distance.push_back(depth[i] >= 1.0f ? 1e6 : glm::length(glm::dvec3(p) / p.w - v.eye));
+    }
+    return v;
+}
+
+/// The converged ray march of the shadow map (CPU, 1024 steps, nearest texel, each lit step exact).
+const std::vector<double>& convergedMarch(const std::string& name, uint32_t r) {
+    static std::map<std::pair<std::string, uint32_t>, std::vector<double>> cache;
+    std::vector<double>& out = cache[{name, r}];
+    if (!out.empty()) return out;
+    const ShadowMap& map = shadowMap(name, r);
+    const CameraView& v = cameraView(name);
+    const penumbra::AirlightSetup fog = benchFog();
+    penumbra::reference::ShadowMapView view;
+    view.view_projection = map.light_view_projection;
+    view.resolution = r;
+    view.depth = &map.depth;
+    out.assign(v.dirs.size(), 0.0);
+    const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < threads; ++t)
+        pool.emplace_back([&, t] {
+            for (size_t i = t; i < v.dirs.size(); i += threads) {
+                const auto [t_in, t_out] = penumbra::reference::frustumInterval(view, v.eye, v.dirs[i], v.distance[i]);
+                out[i] = penumbra::reference::rayMarchExact(
+                    v.eye, v.dirs[i], t_in, t_out, 1024,
+                    [&](const glm::dvec3& x) { return penumbra::reference::shadowMapLit(view, penumbra::reference::ShadowMapLookup::Nearest, x); },
+                    [&](double t) { return penumbra::airlight<double>(fog, v.eye, v.dirs[i], map.light_position, t); });
+            }
+        });
+    for (std::thread& thread : pool) thread.join();
+    return out;
+}
+
+/// An RGBA32F image the render or the march adds its airlight to, cleared, and its read-back.
+struct Canvas {
+    penumbra::gl::Texture texture{GL_TEXTURE_2D};
+    uint32_t w, h;
+    Canvas(uint32_t width, uint32_t height) : w(width), h(height) {
+        glTextureStorage2D(texture.id(), 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    }
+    void clear() {
+        const float zero[4] = {0, 0, 0, 0};
+        glClearTexImage(texture.id(), 0, GL_RGBA, GL_FLOAT, zero);
+    }
+    double rmse(const std::vector<double>& reference) const {
+        std::vector<glm::vec4> pixels(size_t(w) * h);
+        glGetTextureImage(texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels.size()), pixels.data());
+        double sum = 0.0;
+        for (size_t i = 0; i < pixels.size(); ++i) sum += (double(pixels[i].r) - reference[i]) * (double(pixels[i].r) - reference[i]);
+        return std::sqrt(sum / double(pixels.size()));
+    }
+};
+
+penumbra::gl::LightVolumeView lightVolumeView(const std::string& name, uint32_t r) {
+    const ShadowMap& map = shadowMap(name, r);
+    const CameraView& v = cameraView(name);
+    penumbra::gl::LightVolumeView view;
+    view.camera_view_projection = v.view_projection;
+    view.eye = v.eye;
+    view.light_view_projection = map.light_view_projection;
+    view.light_position = map.light_position;
+    return view;
+}
+
+void rayMarchEntry(benchmark::State& state, const std::string& name, uint32_t r, uint32_t steps) {
+    const ShadowMap& map = shadowMap(name, r);
+    const CameraView& v = cameraView(name);
+    const std::vector<double>& reference = convergedMarch(name, r);
+    const uint32_t w = penumbra::bench::smokeRun() ? 32 : kViewWidth, h = penumbra::bench::smokeRun() ? 24 : kViewHeight;
+    Canvas image(w, h);
+    penumbra::gl::LightVolumeRenderer renderer(w, h, benchFog());
+    const penumbra::gl::LightVolumeView view = lightVolumeView(name, r);
+    std::vector<double> times;
+    for (auto _ : state) {
+        for (int run = 0; run < 3; ++run) {
+            image.clear();
+            times.push_back(1e3 * penumbra::bench::timeGpu(
+                                      [&] { renderer.rayMarch(map.gbuffer->depthTexture(), r, steps, view, v.gbuffer->depthTexture(), image.texture.id()); }));
+        }
+        state.SetIterationTime(penumbra::bench::median(times) * 1e-3);
+    }
+    state.counters["march_ms"] = penumbra::bench::median(times);
+    state.counters["steps"] = steps;
+    state.counters["err_rmse"] = image.rmse(reference);
+    penumbra::bench::reportTimer(state);
+    state.SetLabel(name + " " + std::to_string(r) + "^2 ray march " + std::to_string(steps) + " steps");
 }
 
 void lightVolumeEntry(benchmark::State& state, const std::string& name, uint32_t r, double flatness, bool fixed) {
@@ -88,6 +230,20 @@ void lightVolumeEntry(benchmark::State& state, const std::string& name, uint32_t
         state.SetIterationTime(penumbra::bench::median(total) * 1e-3);
     }
     const penumbra::LightVolumeMesh mesh = tessellator.readMesh();
+    const CameraView& v = cameraView(name);
+    const uint32_t w = penumbra::bench::smokeRun() ? 32 : kViewWidth, h = penumbra::bench::smokeRun() ? 24 : kViewHeight;
+    Canvas image(w, h);
+    penumbra::gl::LightVolumeRenderer renderer(w, h, benchFog());
+    const penumbra::gl::LightVolumeView view = lightVolumeView(name, r);
+    std::vector<double> render;
+    for (int run = 0; run < 4; ++run) {
+        image.clear();
+        const double seconds = penumbra::bench::timeGpu([&] { renderer.render(tessellator, view, v.gbuffer->depthTexture(), image.texture.id()); });
+        if (run > 0) render.push_back(1e3 * seconds);  // the first: warm-up
+    }
+    state.counters["render_ms"] = penumbra::bench::median(render);
+    state.counters["volume_ms"] = penumbra::bench::median(total) + penumbra::bench::median(render);
+    state.counters["err_rmse"] = image.rmse(convergedMarch(name, r));
     const auto start = std::chrono::steady_clock::now();
     const std::vector<float> corners = penumbra::lightVolumeCornerDepths(setup, map.depth);
     const penumbra::LightVolumeMesh cpu = penumbra::tessellateLightVolume(setup, corners);
@@ -120,6 +276,13 @@ const bool kRegistered = [] {
                                              [name, r, flatness = flatness, fixed](benchmark::State& st) {
                                                  lightVolumeEntry(st, name, r, flatness, fixed);
                                              })
+                    ->UseManualTime()
+                    ->Iterations(1)
+                    ->Unit(benchmark::kMillisecond);
+            }
+            for (uint32_t steps : {64u, 256u, 1024u}) {
+                const std::string entry = "BM_LightVolumeRayMarch/" + name + "/" + std::to_string(r) + "/" + std::to_string(steps);
+                benchmark::RegisterBenchmark(entry.c_str(), [name, r, steps](benchmark::State& st) { rayMarchEntry(st, name, r, steps); })
                     ->UseManualTime()
                     ->Iterations(1)
                     ->Unit(benchmark::kMillisecond);
