@@ -7,9 +7,10 @@
 // Entries BM_LightVolume/<scene>/<R>/<mode>, mode = static | adaptive_1e-6 | adaptive_1e-4 (the
 // flatness: the adaptive floor stays within 2 * flatness of the static one in post-projective depth).
 // Counters:
-//   edge_map_ms, tessellate_ms, total_ms  GPU stages (median of 3): lattice depths + flatness flags
-//                                         (the seed's Laplacian + edge map), restriction + counts +
-//                                         scan + emission + command (timeGpu's method: GL_TIME_ELAPSED
+//   edge_map_ms, tessellate_ms, total_ms  GPU stages (median of 3): lattice depths + the flags of
+//                                         every level with closure and restriction (the seed's
+//                                         Laplacian, edge map and its mip hierarchy), counts + scan +
+//                                         emission + command (timeGpu's method: GL_TIME_ELAPSED
 //                                         where it measures, else glFinish + wall clock, e.g. llvmpipe)
 //   cpu_ms                                the CPU twin (lattice depths + tessellateLightVolume), once
 //   triangles, floor_triangles            the mesh the GPU emitted (== the CPU twin's)
@@ -25,7 +26,16 @@
 // Entries BM_LightVolumeRayMarch/<scene>/<R>/<steps>, steps = 64 | 256 | 1024: the baseline an
 // engine would run instead (LightVolumeRenderer::rayMarch, GPU), march_ms and err_rmse against the
 // same converged march. The fog: sigma_s 0.05, sigma_t 0.08, isotropic (the table).
-// PENUMBRA_BENCH_SMOKE=1: one scene at 64^2.
+// Entries BM_AirlightTable/<method>: airlight() on the CPU, the same 2000 random rays for every
+// method (eye at the origin, light in [-3, 3]^3, sigma_t log-uniform in [0.01, 5], sigma_s in
+// [0.2, 1] sigma_t, t log-uniform in [0.01, 30] or infinite one time in five), against
+// airlightReference (adaptive Gauss-Kronrod in double, 1e-10): method = table_WxH (isotropic, the
+// table's size: the GPU's R32F texture) or quadrature_N[_hgG] (N Gauss-Legendre nodes per panel;
+// hg 0.6: forward scattering, which the table cannot hold). Counters: ns_double, ns_float (per
+// evaluation, median of 5 passes), err_rel_max / err_rel_rms (|A - ref| / ref, double),
+// err_ainf_max (|A - ref| / A(inf), the size of the terms a render adds: double; err_float_ainf_max
+// in float), table_bytes.
+// PENUMBRA_BENCH_SMOKE=1: one scene at 64^2, 100 airlight rays.
 #include "bench_common.hpp"
 
 #include <penumbra/airlight.hpp>
@@ -42,7 +52,9 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <limits>
 #include <memory>
+#include <random>
 #include <string>
 #include <thread>
 #include <utility>
@@ -261,10 +273,119 @@ void lightVolumeEntry(benchmark::State& state, const std::string& name, uint32_t
     state.SetLabel(name + " " + std::to_string(r) + "^2 " + (fixed ? std::string("static") : "flatness " + std::to_string(flatness)));
 }
 
+/// One airlight case: a ray from the origin, a light, a medium and a distance.
+struct AirlightCase {
+    glm::dvec3 dir, light;
+    double sigma_s, sigma_t, t;
+};
+
+const std::vector<AirlightCase>& airlightCases() {
+    static const std::vector<AirlightCase> cases = [] {
+        std::mt19937_64 rng(12);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        std::normal_distribution<double> normal;
+        std::vector<AirlightCase> out(penumbra::bench::smokeRun() ? 100 : 2000);
+        for (AirlightCase& c : out) {
+            c.dir = glm::normalize(glm::dvec3(normal(rng), normal(rng), normal(rng)));
+            c.light = glm::dvec3(6 * unit(rng) - 3, 6 * unit(rng) - 3, 6 * unit(rng) - 3);
+            c.sigma_t = 0.01 * std::pow(500.0, unit(rng));
+            c.sigma_s = (0.2 + 0.8 * unit(rng)) * c.sigma_t;
+            c.t = unit(rng) < 0.2 ? std::numeric_limits<double>::infinity() : 0.01 * std::pow(3000.0, unit(rng));
+        }
+        return out;
+    }();
+    return cases;
+}
+
+/// airlightReference of every case for phase g: A(t) and A(inf), cached per g.
+const std::vector<std::pair<double, double>>& airlightReferences(double g) {
+    static std::map<double, std::vector<std::pair<double, double>>> cache;
+    std::vector<std::pair<double, double>>& out = cache[g];
+    if (!out.empty()) return out;
+    penumbra::AirlightOptions options;
+    options.method = penumbra::AirlightMethod::Quadrature;
+    for (const AirlightCase& c : airlightCases()) {
+        penumbra::AirlightMedium medium;
+        medium.sigma_s = c.sigma_s;
+        medium.sigma_t = c.sigma_t;
+        medium.hg_g = g;
+        const penumbra::AirlightSetup setup = penumbra::airlightSetup(medium, 1.0, options);
+        out.emplace_back(penumbra::airlightReference(setup, glm::dvec3(0.0), c.dir, c.light, 0.0, c.t),
+                         penumbra::airlightReference(setup, glm::dvec3(0.0), c.dir, c.light, 0.0, penumbra::kAirlightMaxDistance));
+    }
+    return out;
+}
+
+void airlightEntry(benchmark::State& state, const penumbra::AirlightOptions& options, double g) {
+    const std::vector<AirlightCase>& cases = airlightCases();
+    const auto& reference = airlightReferences(g);
+    // One setup per case (the media differ); the table is built once and shared by copy.
+    std::vector<penumbra::AirlightSetup> setups;
+    penumbra::AirlightMedium first;
+    first.sigma_s = first.sigma_t = 1.0;
+    first.hg_g = g;
+    const penumbra::AirlightSetup base = penumbra::airlightSetup(first, 1.0, options);
+    for (const AirlightCase& c : cases) {
+        penumbra::AirlightSetup setup = base;
+        penumbra::AirlightMedium medium;
+        medium.sigma_s = c.sigma_s;
+        medium.sigma_t = c.sigma_t;
+        medium.hg_g = g;
+        penumbra::airlightSetMedium(setup, medium, 1.0);
+        setups.push_back(std::move(setup));
+    }
+    double rel_max = 0, rel_sum2 = 0, ainf_max = 0, float_ainf_max = 0;
+    size_t rel_count = 0;
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const AirlightCase& c = cases[i];
+        const double a = penumbra::airlight<double>(setups[i], glm::dvec3(0.0), c.dir, c.light, c.t);
+        const float f = penumbra::airlight<float>(setups[i], glm::vec3(0.0f), glm::vec3(c.dir), glm::vec3(c.light), float(c.t));
+        const auto [ref, ref_inf] = reference[i];
+        if (ref > 0) {
+            const double rel = std::abs(a - ref) / ref;
+            rel_max = std::max(rel_max, rel);
+            rel_sum2 += rel * rel;
+            ++rel_count;
+        }
+        if (ref_inf > 0) {
+            ainf_max = std::max(ainf_max, std::abs(a - ref) / ref_inf);
+            float_ainf_max = std::max(float_ainf_max, std::abs(double(f) - ref) / ref_inf);
+        }
+    }
+    auto timePass = [&](auto precision) {
+        using T = decltype(precision);
+        std::vector<double> ns;
+        for (int pass = 0; pass < 5; ++pass) {
+            T sum = 0;
+            const auto start = std::chrono::steady_clock::now();
+            for (size_t i = 0; i < cases.size(); ++i)
+                sum += penumbra::airlight<T>(setups[i], glm::vec<3, T>(0), glm::vec<3, T>(cases[i].dir), glm::vec<3, T>(cases[i].light),
+                                             T(cases[i].t));
+            ns.push_back(std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / double(cases.size()));
+            benchmark::DoNotOptimize(sum);
+        }
+        return penumbra::bench::median(ns);
+    };
+    double ns_double = 0, ns_float = 0;
+    for (auto _ : state) {
+        ns_double = timePass(0.0);
+        ns_float = timePass(0.0f);
+        state.SetIterationTime(ns_double * 1e-9 * double(cases.size()));
+    }
+    state.counters["ns_double"] = ns_double;
+    state.counters["ns_float"] = ns_float;
+    state.counters["err_rel_max"] = rel_max;
+    state.counters["err_rel_rms"] = rel_count ? std::sqrt(rel_sum2 / double(rel_count)) : 0.0;
+    state.counters["err_ainf_max"] = ainf_max;
+    state.counters["err_float_ainf_max"] = float_ainf_max;
+    state.counters["table_bytes"] = double(base.tableBytes());
+    state.counters["rays"] = double(cases.size());
+}
+
 const bool kRegistered = [] {
     const bool smoke = penumbra::bench::smokeRun();
     const std::vector<std::string> scenes = smoke ? std::vector<std::string>{"columns"}
-                                                  : std::vector<std::string>{"torus_knot", "columns", "hairball", "grass"};
+                                                  : std::vector<std::string>{"torus_knot", "columns", "hairball", "grass", "window_wall"};
     const std::vector<uint32_t> sizes = smoke ? std::vector<uint32_t>{64} : std::vector<uint32_t>{512, 1024, 2048};
     const std::pair<const char*, double> modes[] = {{"static", 0.0}, {"adaptive_1e-6", 1e-6}, {"adaptive_1e-4", 1e-4}};
     for (const std::string& name : scenes) {
@@ -288,6 +409,37 @@ const bool kRegistered = [] {
                     ->Unit(benchmark::kMillisecond);
             }
         }
+    }
+    struct AirlightMethodEntry {
+        std::string name;
+        penumbra::AirlightMethod method;
+        uint32_t width, height, nodes;
+        double g;
+    };
+    const std::vector<AirlightMethodEntry> methods = {
+        {"table_32x32", penumbra::AirlightMethod::Table, 32, 32, 16, 0.0},
+        {"table_64x64", penumbra::AirlightMethod::Table, 64, 64, 16, 0.0},
+        {"table_128x64", penumbra::AirlightMethod::Table, 128, 64, 16, 0.0},
+        {"table_256x128", penumbra::AirlightMethod::Table, 256, 128, 16, 0.0},
+        {"quadrature_8", penumbra::AirlightMethod::Quadrature, 128, 64, 8, 0.0},
+        {"quadrature_16", penumbra::AirlightMethod::Quadrature, 128, 64, 16, 0.0},
+        {"quadrature_32", penumbra::AirlightMethod::Quadrature, 128, 64, 32, 0.0},
+        {"quadrature_16_hg0.6", penumbra::AirlightMethod::Quadrature, 128, 64, 16, 0.6},
+        {"quadrature_32_hg0.6", penumbra::AirlightMethod::Quadrature, 128, 64, 32, 0.6},
+    };
+    for (const AirlightMethodEntry& m : methods) {
+        if (smoke && m.name != "table_128x64" && m.name != "quadrature_16") continue;
+        penumbra::AirlightOptions options;
+        options.method = m.method;
+        options.table_width = m.width;
+        options.table_height = m.height;
+        options.quadrature_nodes = m.nodes;
+        const double g = m.g;
+        benchmark::RegisterBenchmark(("BM_AirlightTable/" + m.name).c_str(),
+                                     [options, g](benchmark::State& st) { airlightEntry(st, options, g); })
+            ->UseManualTime()
+            ->Iterations(1)
+            ->Unit(benchmark::kMicrosecond);
     }
     return true;
 }();

@@ -142,7 +142,7 @@ TEST_CASE("GPU light-volume tessellator == CPU twin: planes, saddles, random map
 
 TEST_CASE("GPU light-volume tessellator == CPU twin on the built-in scenes' shadow maps (256^2, columns 1024^2)") {
     const bool exact = penumbra::test::rendererRoundsCorrectly(penumbra::test::context().renderer());
-    for (const char* name : {"torus_knot", "columns", "hairball", "grass"}) {
+    for (const char* name : {"torus_knot", "columns", "hairball", "grass", "window_wall"}) {
         const penumbra::test::SceneMap map = penumbra::test::sceneMap(name, 256);
         const uint64_t adaptive = compare(name, setupOf(256, 1e-6), map.depth, exact);
         const uint64_t fixed = compare(name, setupOf(256, 0.0, LightVolumeTessellation::Static), map.depth, exact);
@@ -150,6 +150,21 @@ TEST_CASE("GPU light-volume tessellator == CPU twin on the built-in scenes' shad
     }
     const penumbra::test::SceneMap columns = penumbra::test::sceneMap("columns", 1024);
     compare("columns", setupOf(1024, 1e-6), columns.depth, exact);
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("GPU light-volume tessellator == CPU twin on every built-in scene at 1024^2 and 2048^2, static and adaptive") {
+        const bool exact = penumbra::test::rendererRoundsCorrectly(penumbra::test::context().renderer());
+        for (uint32_t r : {1024u, 2048u}) {
+            for (const char* name : {"torus_knot", "columns", "hairball", "grass", "window_wall"}) {
+                const penumbra::test::SceneMap map = penumbra::test::sceneMap(name, r);
+                const uint64_t adaptive = compare(name, setupOf(r, 1e-6), map.depth, exact);
+                const uint64_t fixed = compare(name, setupOf(r, 0.0, LightVolumeTessellation::Static), map.depth, exact);
+                MESSAGE(std::string(name), " ", r, "^2: GPU adaptive (flatness 1e-6) ", adaptive, " triangles, static ", fixed, " (",
+                        100.0 * double(adaptive) / double(fixed), " %)");
+            }
+        }
+    }
 }
 
 TEST_CASE("light-volume tessellator: per-frame contract (no query, read-back, wait or allocation) and load-time errors") {
@@ -455,4 +470,68 @@ TEST_CASE("GPU ray-march baseline == its CPU twin (reference::rayMarchExact, nea
     CHECK(peak > 0.0);
     CHECK(p99 <= 1e-3 * peak);
     CHECK(worst <= 0.05 * peak);  // a step midpoint within float rounding of the shadow map's depth
+}
+
+TEST_CASE("light-volume renderer: per-frame contract of render() and rayMarch() (no query, read-back, wait or allocation) and load-time errors") {
+    penumbra::test::context();
+    const penumbra::test::ShaftScene scene = penumbra::test::shaftScene(true);
+    const penumbra::AirlightSetup airlight = tableFog();
+    const uint32_t w = 32, h = 24;
+    const glm::dvec3 eye(5.0, 1.5, 6.0), target(0.0, 1.0, 0.0);
+    penumbra::LightVolumeOptions options;
+    options.flatness = 1e-6;
+    penumbra::gl::LightVolumeTessellator& volume = tessellator(penumbra::lightVolumeSetup(scene.r, options));
+    DepthTexture shadow_map(scene.r, scene.depth);
+    volume.tessellate(shadow_map.id);
+    std::vector<float> window(size_t(w) * h, 1.0f);
+    DepthTexture camera_depth(0, {}, w, h, window);
+    GLuint lit = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &lit);
+    glTextureStorage2D(lit, 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
+    penumbra::gl::LightVolumeView view;
+    view.camera_view_projection = penumbra::test::cameraViewProjection(eye, target, w, h);
+    view.eye = eye;
+    view.light_view_projection = scene.view_projection;
+    view.light_position = scene.light;
+    // Warm-up: lazy driver compiles, first-use state.
+    renderer.render(volume, view, camera_depth.id, lit);
+    renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
+    glFinish();
+    for (int which = 0; which < 2; ++which) {
+        INFO((which == 0 ? "render()" : "rayMarch()"));
+        penumbra::test::GlAudit audit;
+        penumbra::test::AllocationCounter heap;
+        audit.start();
+        heap.start();
+        if (which == 0) renderer.render(volume, view, camera_depth.id, lit);
+        else renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
+        heap.stop();
+        audit.stop();
+        INFO(audit.report());
+        CHECK(audit.calls() > 0);
+        CHECK(audit.queries() == 0);
+        CHECK(audit.errorChecks() == 0);
+        CHECK(audit.readBacks() == 0);
+        CHECK(audit.maps() == 0);
+        CHECK(audit.syncWaits() == 0);
+        CHECK(heap.allocations() == 0);
+        glBindBuffer(0xDEADu, 0);  // an engine's queued error survives the call
+        if (which == 0) renderer.render(volume, view, camera_depth.id, lit);
+        else renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
+        CHECK(glGetError() == GL_INVALID_ENUM);
+        CHECK(glGetError() == GL_NO_ERROR);
+    }
+    glDeleteTextures(1, &lit);
+
+    // Load-time errors, each naming the value.
+    CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeRenderer(0, 4, airlight), doctest::Contains("viewport 0x4"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeRenderer(4, 20000, airlight), doctest::Contains("viewport 4x20000"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeRenderer(4, 4, airlight, GL_RGBA8), doctest::Contains("0x8058"), penumbra::Error);
+    penumbra::AirlightMedium forward;
+    forward.sigma_s = 0.08;
+    forward.sigma_t = 0.1;
+    forward.hg_g = 0.5;
+    CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeRenderer(4, 4, penumbra::airlightSetup(forward, 50.0)), doctest::Contains("got method 2"),
+                         penumbra::Error);
 }

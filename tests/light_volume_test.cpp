@@ -277,14 +277,14 @@ void builtinScenes(uint32_t r, const std::vector<std::string>& names) {
 }  // namespace
 
 TEST_CASE("light volume: built-in scenes' shadow maps at 256^2, closed, static and adaptive") {
-    builtinScenes(256, {"torus_knot", "columns", "hairball", "grass"});
+    builtinScenes(256, {"torus_knot", "columns", "hairball", "grass", "window_wall"});
 }
 
 TEST_CASE("light volume: columns at 1024^2") { builtinScenes(1024, {"columns"}); }
 
 TEST_SUITE("stress") {
     TEST_CASE("light volume: every built-in scene at 1024^2 and 2048^2") {
-        builtinScenes(1024, {"torus_knot", "hairball", "grass"});
-        builtinScenes(2048, {"torus_knot", "columns", "hairball", "grass"});
+        builtinScenes(1024, {"torus_knot", "hairball", "grass", "window_wall"});
+        builtinScenes(2048, {"torus_knot", "columns", "hairball", "grass", "window_wall"});
     }
 }

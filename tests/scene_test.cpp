@@ -272,7 +272,11 @@ TEST_CASE("scene: PCG32 matches the reference sequence") {
 
 TEST_CASE("scene: builtin names and lookup") {
     CHECK(builtinNames() == std::vector<std::string>{"torus_knot", "columns", "hairball", "grass"});
-    for (const std::string& name : builtinNames()) {
+    CHECK(extraBuiltinNames() == std::vector<std::string>{"window_wall"});
+    std::vector<std::string> every = builtinNames();
+    const std::vector<std::string> extras = extraBuiltinNames();
+    every.insert(every.end(), extras.begin(), extras.end());
+    for (const std::string& name : every) {
         const Scene scene = builtin(name);
         CHECK(scene.name == name);
         REQUIRE(scene.meshes.size() == 2);
@@ -285,7 +289,7 @@ TEST_CASE("scene: builtin names and lookup") {
     }
     const std::string message = errorMessage([] { builtin("teapot"); });
     CHECK(contains(message, "'teapot'"));
-    for (const std::string& name : builtinNames()) CHECK(contains(message, name));
+    for (const std::string& name : every) CHECK(contains(message, name));
     CHECK(contains(errorMessage([] { load("builtin:nope"); }), "'nope'"));
     CHECK(contains(errorMessage([] { load("builtin:"); }), "valid names"));
 }
@@ -368,6 +372,45 @@ TEST_CASE("scene: columns are closed, outward, non-degenerate, unit sized") {
     checkFraming(empty, 0.0f);
 }
 
+TEST_CASE("scene: window_wall is columns(9) plus a closed wall whose three windows are open") {
+    const Scene scene = windowWall();
+    CHECK(scene.name == "window_wall");
+    const Mesh& object = objectOf(scene);
+    CHECK(object.closed);
+    CHECK(everyEdgeHasOneOppositeTwin(object));
+    CHECK(isClosed(object));
+    CHECK(signedVolume(object) > 0.0);
+    checkWellFormed(object, 1e-9);
+    // The columns come first, unchanged.
+    const Mesh& pillars = objectOf(columns(9));
+    REQUIRE(object.positions.size() > pillars.positions.size());
+    CHECK(std::equal(pillars.positions.begin(), pillars.positions.end(), object.positions.begin()));
+    CHECK(std::equal(pillars.indices.begin(), pillars.indices.end(), object.indices.begin()));
+    // The wall: every vertex past the columns' lies in its slab, none inside a window opening, and
+    // the wall spans its full length and height.
+    const Bounds box = object.bounds();
+    CHECK(box.min.x == doctest::Approx(-0.75f));
+    CHECK(box.max.y == doctest::Approx(1.3f));
+    CHECK(box.min.z == doctest::Approx(-0.6f));
+    CHECK(box.max.z == doctest::Approx(0.6f));
+    const float pier = (1.2f - 3 * 0.22f) / 4;
+    size_t inside_window = 0;
+    for (size_t v = pillars.positions.size(); v < object.positions.size(); ++v) {
+        const glm::vec3 p = object.positions[v];
+        CHECK(p.x >= -0.7501f);
+        CHECK(p.x <= -0.6899f);
+        for (int w = 0; w < 3; ++w) {
+            const float z0 = -0.6f + pier + float(w) * (pier + 0.22f);
+            inside_window += p.z > z0 + 1e-4f && p.z < z0 + 0.22f - 1e-4f && p.y > 0.45f + 1e-4f && p.y < 1.05f - 1e-4f;
+        }
+    }
+    CHECK(inside_window == 0);
+    checkFraming(scene, 0.0f);
+    CHECK(sameMesh(load("builtin:window_wall").meshes[1], object));
+    CHECK(objectOf(windowWall(false)).triangleCount() == object.triangleCount());
+    CHECK(windowWall(false).meshes.size() == 1);
+}
+
 TEST_CASE("scene: hairball and grass are open, seeded and deterministic") {
     const uint32_t seed = freshSeed();
     MESSAGE("fresh seed " << seed);
@@ -419,6 +462,7 @@ TEST_CASE("scene: default camera and light frame the object and its shadow") {
     for (const std::string& name : builtinNames()) {
         checkFraming(builtin(name), 0.0f);
     }
+    checkFraming(windowWall(), 0.0f);
     checkFraming(torusKnot(16, false), 0.0f);
     checkFraming(columns(1), 0.0f);
     checkFraming(hairball(0), 0.0f);

@@ -1,7 +1,7 @@
 // soft_shadows — penumbra's main job: render a scene lit by a spherical light with sample-based
 // soft shadows and write a PNG, optionally with a one-line JSON report on stdout.
 //
-//   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|PATH.obj]
+//   soft_shadows [--scene builtin:torus_knot|builtin:columns|builtin:hairball|builtin:grass|builtin:window_wall|PATH.obj]
 //                [--light-pos x,y,z] [--light-radius r] [--samples N] [--width W] [--height H]
 //                [--mode reference|soft|hard|hpc|dsm|volumetric] [--reference] [--out FILE.png] [--json] [--no-ground]
 //                [--view-samples depth|exact] [--lut exact|lut|brute] [--lut-res R] [--sets K] [--rotations R] [--grid G]
@@ -256,7 +256,7 @@ const ModeFlag kModeFlags[] = {
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
-    app.add_option("--scene", a.scene, "builtin:NAME (torus_knot, columns, hairball, grass) or PATH.obj")
+    app.add_option("--scene", a.scene, "builtin:NAME (torus_knot, columns, hairball, grass; window_wall: columns behind a wall with windows, for --mode volumetric) or PATH.obj")
         ->type_name("SCENE")
         ->capture_default_str();
     app.add_option("--light-pos", raw.light_pos, "light centre x,y,z (default: the scene's)")->type_name("X,Y,Z");

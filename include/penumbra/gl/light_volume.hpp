@@ -12,11 +12,12 @@
 //             (DrawArraysIndirectCommand {3 T, 1, 0, 0}, then the floor's triangle count and T): a
 //             vertex shader that fetches triangles()[gl_VertexID] and unprojects it draws the volume
 //             with one glDrawArraysIndirect.
-//   per frame: tessellate() — (1) lattice depths, (2) flatness flags of every level (each lattice
-//             point tests the cells whose closed square holds it), (3) per level: restriction of the
-//             level below, closure into this one, (4) triangles per item (cells of every level, then
-//             4 R border segments), (5) exclusive scan, (6) emission at the scanned offsets, (7) the
-//             draw command. Nothing is allocated, queried, read back or thrown per frame.
+//   per frame: tessellate() — (1) lattice depths, (2) per level k = 1 .. L, finest first: restriction
+//             of level k - 1, then level k's flags — closure (a subdivided child) or else the flatness
+//             test, one invocation per row of a cell, a cell with a subdivided child not tested
+//             (closure decides it), (3) triangles per item (cells of every level, then 4 R border
+//             segments), (4) exclusive scan, (5) emission at the scanned offsets, (6) the draw
+//             command. Nothing is allocated, queried, read back or thrown per frame.
 //   equals:   tessellateLightVolume (and lightVolumeCornerDepths) bit for bit where float and double
 //             + - * / are correctly rounded and not fused (llvmpipe; `precise` forbids the fusing):
 //             the same lattice depths, flags, triangles and order.
@@ -54,8 +55,9 @@
 namespace penumbra::gl {
 
 /// GPU time of the tessellator's stages (enableStageTimers(); stageTimes() reads them back: for
-/// tools and benchmarks, not for the frame), milliseconds. edge_map: lattice depths + flatness flags
-/// (the seed's Laplacian + edge map); tessellate: restriction, counts, scan, emission, command.
+/// tools and benchmarks, not for the frame), milliseconds. edge_map: lattice depths + the flags of
+/// every level with closure and restriction (the seed's Laplacian, edge map and its mip hierarchy);
+/// tessellate: counts, scan, emission, command.
 struct LightVolumeStageTimes {
     double edge_map = 0, tessellate = 0;
     double total() const { return edge_map + tessellate; }
@@ -95,12 +97,10 @@ public:
         scanner_.reserve(items_ + 1);
 
         corners_program_ = buildComputeProgram("penumbra/light_volume/corners.comp.glsl", {}, library);
-        deviation_program_ = buildComputeProgram("penumbra/light_volume/deviation.comp.glsl", {}, library);
-        for (int pass = 0; pass < 2; ++pass) {
-            const ShaderDefines d = {{"PENUMBRA_LV_PASS", std::to_string(pass)}};
-            restrict_program_[pass] = buildComputeProgram("penumbra/light_volume/restrict.comp.glsl", d, library);
-            emit_program_[pass] = buildComputeProgram("penumbra/light_volume/emit.comp.glsl", d, library);
-        }
+        flags_program_ = buildComputeProgram("penumbra/light_volume/deviation.comp.glsl", {}, library);
+        restrict_program_ = buildComputeProgram("penumbra/light_volume/restrict.comp.glsl", {}, library);
+        for (int pass = 0; pass < 2; ++pass)
+            emit_program_[pass] = buildComputeProgram("penumbra/light_volume/emit.comp.glsl", {{"PENUMBRA_LV_PASS", std::to_string(pass)}}, library);
         indirect_program_ = buildComputeProgram("penumbra/light_volume/indirect.comp.glsl", {}, library);
         glCreateSamplers(1, &sampler_);
         glSamplerParameteri(sampler_, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -158,20 +158,18 @@ public:
         const uint64_t lattice = uint64_t(r + 1) * (r + 1);
         dispatch(corners_program_, lattice);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        dispatch(deviation_program_, lattice);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        endStage();
-        beginStage(1);
         for (uint32_t k = 1; k <= levels; ++k) {
             if (k >= 2) {
                 bindLevel(k - 1);
-                dispatch(restrict_program_[0], uint64_t(r >> (k - 1)) * (r >> (k - 1)));
+                dispatch(restrict_program_, uint64_t(r >> (k - 1)) * (r >> (k - 1)));
                 glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             }
             bindLevel(k);
-            dispatch(restrict_program_[1], uint64_t(r >> k) * (r >> k));
+            dispatch(flags_program_, uint64_t(r >> k) * (r >> k) * ((1ull << k) + 1));  // a row of every cell
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
+        endStage();
+        beginStage(1);
         bindLevel(0);
         dispatch(emit_program_[0], items_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -249,7 +247,7 @@ private:
     uint64_t cells_ = 0, items_ = 0;
     uint32_t ubo_stride_ = 256;
     Buffer corners_, flags_, counts_, triangles_, indirect_, params_;
-    Program corners_program_, deviation_program_, restrict_program_[2], emit_program_[2], indirect_program_;
+    Program corners_program_, flags_program_, restrict_program_, emit_program_[2], indirect_program_;
     GLuint sampler_ = 0;
     GLuint queries_[2] = {0, 0};
     bool wall_clock_ = false;

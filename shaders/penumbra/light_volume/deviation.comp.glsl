@@ -1,9 +1,15 @@
-// penumbra — light-volume "needs subdivision" flags (billeter2010's edge map, replaced by the
-// error-bounded flatness test of include/penumbra/light_volume.hpp): lattice point (i, j) checks,
-// at every level k >= 1, each cell of size 2^k whose closed square holds it, and flags the cell when
-// its depth is more than the flatness away from the cell's corner plane — in double, each operation
-// rounded alone (precise), in the host's order. Static tessellation flags every cell. One invocation
-// per lattice point; flags start cleared; every writer stores 1.
+// penumbra — light-volume "needs subdivision" flags of level k (params.size.z = k >= 1; billeter2010's
+// edge map and its mip hierarchy, replaced by the error-bounded flatness test of
+// include/penumbra/light_volume.hpp, steps 1 and 2): closure — a cell with a subdivided child is
+// subdivided — and otherwise the flatness test — the cell is subdivided when a lattice depth in its
+// closed square is more than the flatness away from its corner plane, in double, each operation
+// rounded alone (precise), in the host's order (detail::light_volume::subdivisionFlags). Static
+// tessellation flags every cell. One invocation per row j = 0 .. s of a cell of size s = 2^k; row 0
+// also writes the closure. The host runs, for k = 1 .. L: restriction of level k - 1 (k >= 2,
+// restrict.comp.glsl), then this pass for level k, so the children's flags are final when read.
+// Flags start cleared; every writer stores 1. A row stops at its first point off the plane and does
+// not start when another row has already flagged the cell (a stale read of a flag just tests it), so
+// each cell's flag is "closure or some point off the plane", whatever the order: the CPU twin's.
 #include "penumbra/light_volume/light_volume_shared.h"
 #include "penumbra/common/dispatch.glsl"
 
@@ -16,41 +22,36 @@ layout(std430, binding = PENUMBRA_LV_BINDING_FLAGS) buffer PenumbraLvFlagsBuffer
 
 double penumbraLvCorner(uint i, uint j) { return double(penumbraLvCorners[j * (penumbraLvParams.size.x + 1u) + i]); }
 
-bool penumbraLvOffPlane(uint k, uint cx, uint cy, uint i, uint j, double flatness) {
-    const uint s = 1u << k, x0 = cx * s, y0 = cy * s;
+void main() {
+    const uint k = penumbraLvParams.size.z, s = 1u << k, cells = penumbraLvCells(k);
+    const uint index = penumbraLinearGroup() * PENUMBRA_LV_GROUP_SIZE + gl_LocalInvocationID.x;
+    if (index >= cells * cells * (s + 1u)) return;
+    const uint cell = index / (s + 1u), j = index % (s + 1u);
+    const int cx = int(cell % cells), cy = int(cell / cells);
+    const uint flag = penumbraLvOffset(k) + cell;
+    if (penumbraLvParams.size.w != 0u) {  // static: every cell
+        if (j == 0u) penumbraLvFlags[flag] = 1u;
+        return;
+    }
+    if (penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy) ||
+        penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy + 1) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy + 1)) {
+        if (j == 0u) penumbraLvFlags[flag] = 1u;  // closure
+        return;
+    }
+    if (penumbraLvFlags[flag] != 0u) return;
+    const double flatness = packDouble2x32(penumbraLvParams.flatness.xy);
+    const uint x0 = uint(cx) * s, y0 = uint(cy) * s;
     const double p00 = penumbraLvCorner(x0, y0);
     precise double gx = (penumbraLvCorner(x0 + s, y0) - p00) / double(s);
     precise double gy = (penumbraLvCorner(x0, y0 + s) - p00) / double(s);
-    precise double row = p00 + gy * double(j - y0);
-    precise double plane = row + gx * double(i - x0);
-    precise double off = abs(penumbraLvCorner(i, j) - plane);
-    return off > flatness;
-}
-
-void main() {
-    const uint r = penumbraLvParams.size.x, n = r + 1u;
-    const uint index = penumbraLinearGroup() * PENUMBRA_LV_GROUP_SIZE + gl_LocalInvocationID.x;
-    if (index >= n * n) return;
-    const uint i = index % n, j = index / n;
-    const bool all = penumbraLvParams.size.w != 0u;
-    const double flatness = packDouble2x32(penumbraLvParams.flatness.xy);
-    for (uint k = 1u; k <= penumbraLvLevels(); ++k) {
-        const uint s = 1u << k, cells = r >> k;
-        uint xs[2], ys[2];
-        uint nx = 0u, ny = 0u;
-        if (i / s < cells) xs[nx++] = i / s;
-        if (i % s == 0u && i / s >= 1u) xs[nx++] = i / s - 1u;
-        if (j / s < cells) ys[ny++] = j / s;
-        if (j % s == 0u && j / s >= 1u) ys[ny++] = j / s - 1u;
-        for (uint a = 0u; a < nx; ++a) {
-            for (uint b = 0u; b < ny; ++b) {
-                const uint cell = penumbraLvOffset(k) + ys[b] * cells + xs[a];
-                if (all) {
-                    if (i == xs[a] * s && j == ys[b] * s) penumbraLvFlags[cell] = 1u;
-                } else if (penumbraLvOffPlane(k, xs[a], ys[b], i, j, flatness)) {
-                    penumbraLvFlags[cell] = 1u;
-                }
-            }
+    precise double row = p00 + gy * double(j);
+    const uint base = (y0 + j) * (penumbraLvParams.size.x + 1u) + x0;
+    for (uint i = 0u; i <= s; ++i) {
+        precise double plane = row + gx * double(i);
+        precise double off = abs(double(penumbraLvCorners[base + i]) - plane);
+        if (off > flatness) {
+            penumbraLvFlags[flag] = 1u;
+            return;
         }
     }
 }
