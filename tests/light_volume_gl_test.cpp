@@ -7,8 +7,7 @@
 #include <penumbra/light_volume.hpp>
 #include <penumbra/reference/light_shafts.hpp>
 
-#include "support/alloc_counter.hpp"
-#include "support/gl_audit.hpp"
+#include "support/per_frame_contract.hpp"
 #include "support/gl_test_support.hpp"
 #include "shader_catalog.hpp"
 #include "support/light_volume_maps.hpp"
@@ -176,21 +175,7 @@ TEST_CASE("light-volume tessellator: per-frame contract (no query, read-back, wa
     penumbra::gl::LightVolumeTessellator gpu(setup);
     gpu.tessellate(texture.id);  // warm-up: lazy driver compiles, first-use state
     glFinish();
-    penumbra::test::GlAudit audit;
-    penumbra::test::AllocationCounter heap;
-    audit.start();
-    heap.start();
-    gpu.tessellate(texture.id);
-    heap.stop();
-    audit.stop();
-    INFO(audit.report());
-    CHECK(audit.calls() > 0);
-    CHECK(audit.queries() == 0);
-    CHECK(audit.errorChecks() == 0);
-    CHECK(audit.readBacks() == 0);
-    CHECK(audit.maps() == 0);
-    CHECK(audit.syncWaits() == 0);
-    CHECK(heap.allocations() == 0);
+    penumbra::test::checkPerFrameContract([&] { gpu.tessellate(texture.id); });
     glBindBuffer(0xDEADu, 0);  // an engine's queued error survives tessellate()
     gpu.tessellate(texture.id);
     CHECK(glGetError() == GL_INVALID_ENUM);
@@ -500,25 +485,13 @@ TEST_CASE("light-volume renderer: per-frame contract of render() and rayMarch() 
     glFinish();
     for (int which = 0; which < 2; ++which) {
         INFO((which == 0 ? "render()" : "rayMarch()"));
-        penumbra::test::GlAudit audit;
-        penumbra::test::AllocationCounter heap;
-        audit.start();
-        heap.start();
-        if (which == 0) renderer.render(volume, view, camera_depth.id, lit);
-        else renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
-        heap.stop();
-        audit.stop();
-        INFO(audit.report());
-        CHECK(audit.calls() > 0);
-        CHECK(audit.queries() == 0);
-        CHECK(audit.errorChecks() == 0);
-        CHECK(audit.readBacks() == 0);
-        CHECK(audit.maps() == 0);
-        CHECK(audit.syncWaits() == 0);
-        CHECK(heap.allocations() == 0);
+        const auto frame = [&] {
+            if (which == 0) renderer.render(volume, view, camera_depth.id, lit);
+            else renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
+        };
+        penumbra::test::checkPerFrameContract(frame);
         glBindBuffer(0xDEADu, 0);  // an engine's queued error survives the call
-        if (which == 0) renderer.render(volume, view, camera_depth.id, lit);
-        else renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
+        frame();
         CHECK(glGetError() == GL_INVALID_ENUM);
         CHECK(glGetError() == GL_NO_ERROR);
     }

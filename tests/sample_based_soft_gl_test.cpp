@@ -6,8 +6,7 @@
 // vs the oracle is reported, and its bits are compared with the CPU twin's Lut mode: the GPU looks
 // the fp64 planes up after rounding them to float, the twin in double, so bits may differ where a
 // plane lies within float rounding of a LUT cell border (tolerance: 1e-3 of the bits).
-#include "support/alloc_counter.hpp"
-#include "support/gl_audit.hpp"
+#include "support/per_frame_contract.hpp"
 
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
@@ -432,23 +431,10 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
         // Per-frame contract (docs/design.md convention 2): after warm-up, no query, error check,
         // read-back, map, wait or allocation.
         glFinish();
-        penumbra::test::GlAudit audit;
-        penumbra::test::AllocationCounter heap;
-        audit.start();
-        heap.start();
-        const Status status = pipeline.run(input, count, lut_table, draw);
-        heap.stop();
-        audit.stop();
-        INFO(audit.report());
+        Status status = Status::Ok;
+        const size_t calls = penumbra::test::checkPerFrameContract([&] { status = pipeline.run(input, count, lut_table, draw); });
         CHECK(status == Status::Ok);
-        CHECK(audit.calls() > 0);
-        CHECK(audit.queries() == 0);
-        CHECK(audit.errorChecks() == 0);
-        CHECK(audit.readBacks() == 0);
-        CHECK(audit.maps() == 0);
-        CHECK(audit.syncWaits() == 0);
-        CHECK(heap.allocations() == 0);
-        MESSAGE("run: ", audit.calls(), " GL calls, ", audit.queries(), " queries, ", heap.allocations(), " allocations");
+        MESSAGE("run: ", calls, " GL calls under the per-frame audit");
         glBindBuffer(0xDEADu, 0);  // an engine's queued error survives run()
         pipeline.run(input, count, lut_table, draw);
         CHECK(glGetError() == GL_INVALID_ENUM);

@@ -254,6 +254,16 @@ std::string prismObj(const std::vector<glm::vec2>& polygon, float height) {
     return obj.str();
 }
 
+/// A generated closed solid: flagged closed, every directed edge with one opposite twin, closed by
+/// the library's own test, outward (positive volume) and well formed.
+void checkClosedSolid(const Mesh& mesh, double min_area) {
+    CHECK(mesh.closed);
+    CHECK(everyEdgeHasOneOppositeTwin(mesh));
+    CHECK(isClosed(mesh));
+    CHECK(signedVolume(mesh) > 0.0);
+    checkWellFormed(mesh, min_area);
+}
+
 }  // namespace
 
 // =============================================================================================
@@ -330,11 +340,7 @@ TEST_CASE("scene: torus knot is closed, outward, non-degenerate, unit sized") {
         const size_t segments = 4u * tessellation, sides = std::max(3u, tessellation / 4);
         CHECK(knot.positions.size() == segments * sides);
         CHECK(knot.triangleCount() == 2 * segments * sides);
-        CHECK(knot.closed);
-        CHECK(everyEdgeHasOneOppositeTwin(knot));
-        CHECK(isClosed(knot));
-        CHECK(signedVolume(knot) > 0.0);
-        checkWellFormed(knot, 1e-7);
+        checkClosedSolid(knot, 1e-7);
         checkUnitBoxOnGround(knot);
     }
     CHECK(torusKnot().meshes[1].triangleCount() == 8192);
@@ -347,11 +353,7 @@ TEST_CASE("scene: columns are closed, outward, non-degenerate, unit sized") {
         INFO("count " << count);
         const Scene scene = columns(count);
         const Mesh& object = objectOf(scene);
-        CHECK(object.closed);
-        CHECK(everyEdgeHasOneOppositeTwin(object));
-        CHECK(isClosed(object));
-        CHECK(signedVolume(object) > 0.0);
-        checkWellFormed(object, 1e-9);
+        checkClosedSolid(object, 1e-9);
         const Bounds box = object.bounds();
         CHECK(box.min.y == 0.0f);
         CHECK(box.max.y <= 1.0f);
@@ -376,11 +378,7 @@ TEST_CASE("scene: window_wall is columns(9) plus a closed wall whose three windo
     const Scene scene = windowWall();
     CHECK(scene.name == "window_wall");
     const Mesh& object = objectOf(scene);
-    CHECK(object.closed);
-    CHECK(everyEdgeHasOneOppositeTwin(object));
-    CHECK(isClosed(object));
-    CHECK(signedVolume(object) > 0.0);
-    checkWellFormed(object, 1e-9);
+    checkClosedSolid(object, 1e-9);
     // The columns come first, unchanged.
     const Mesh& pillars = objectOf(columns(9));
     REQUIRE(object.positions.size() > pillars.positions.size());
