@@ -30,6 +30,7 @@ using penumbra::LightVolumeMesh;
 using penumbra::LightVolumeOptions;
 using penumbra::LightVolumeSetup;
 using penumbra::LightVolumeTessellation;
+using penumbra::test::volumeSetup;
 
 /// The shadow map as the engine would have it: a 32-bit float depth texture.
 struct DepthTexture {
@@ -47,6 +48,34 @@ struct DepthTexture {
     DepthTexture(const DepthTexture&) = delete;
     DepthTexture& operator=(const DepthTexture&) = delete;
 };
+
+/// The engine's lit image: RGBA32F, cleared to 0; red() reads the airlight back (row-major, bottom-up).
+struct LitImage {
+    penumbra::gl::Texture texture{GL_TEXTURE_2D};
+    uint32_t w, h;
+    LitImage(uint32_t width, uint32_t height) : w(width), h(height) {
+        glTextureStorage2D(texture.id(), 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+        const float zero[4] = {0, 0, 0, 0};
+        glClearTexImage(texture.id(), 0, GL_RGBA, GL_FLOAT, zero);
+    }
+    std::vector<float> red() const {
+        std::vector<glm::vec4> pixels(size_t(w) * h);
+        glGetTextureImage(texture.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels.size()), pixels.data());
+        std::vector<float> out(pixels.size());
+        for (size_t i = 0; i < pixels.size(); ++i) out[i] = pixels[i].r;
+        return out;
+    }
+};
+
+/// The render's view of the shaft scene from `eye` through `camera`.
+penumbra::gl::LightVolumeView shaftView(const penumbra::test::ShaftScene& scene, const glm::dmat4& camera, const glm::dvec3& eye) {
+    penumbra::gl::LightVolumeView view;
+    view.camera_view_projection = camera;
+    view.eye = eye;
+    view.light_view_projection = scene.view_projection;
+    view.light_position = scene.light;
+    return view;
+}
 
 /// Tessellators by (R, flatness, mode): programs and buffers are load-time objects, reused.
 penumbra::gl::LightVolumeTessellator& tessellator(const LightVolumeSetup& setup) {
@@ -97,13 +126,6 @@ uint64_t compare(const std::string& what, const LightVolumeSetup& setup, const s
     return mesh.triangleCount();
 }
 
-LightVolumeSetup setupOf(uint32_t r, double flatness, LightVolumeTessellation mode = LightVolumeTessellation::Adaptive) {
-    LightVolumeOptions options;
-    options.flatness = flatness;
-    options.tessellation = mode;
-    return penumbra::lightVolumeSetup(r, options);
-}
-
 }  // namespace
 
 TEST_CASE("GPU light-volume tessellator == CPU twin: planes, saddles, random maps, static and adaptive") {
@@ -130,11 +152,11 @@ TEST_CASE("GPU light-volume tessellator == CPU twin: planes, saddles, random map
                 }
             }
             const double flatness = trial < 4 ? 0.0 : std::pow(10.0, -2.0 - 4.0 * unit(rng));
-            compare("kind " + std::to_string(kind), setupOf(r, flatness), depth, exact);
+            compare("kind " + std::to_string(kind), volumeSetup(r, flatness), depth, exact);
             ++maps;
         }
         std::vector<float> depth(size_t(r) * r, 1.0f);
-        compare("static, depth 1", setupOf(r, 0.0, LightVolumeTessellation::Static), depth, exact);
+        compare("static, depth 1", volumeSetup(r, 0.0, LightVolumeTessellation::Static), depth, exact);
     }
     MESSAGE("seed ", seed, ": ", maps, " random maps, GPU == CPU", std::string(exact ? " bit for bit" : " (closed; this driver is not exact)"));
 }
@@ -143,12 +165,12 @@ TEST_CASE("GPU light-volume tessellator == CPU twin on the built-in scenes' shad
     const bool exact = penumbra::test::rendererRoundsCorrectly(penumbra::test::context().renderer());
     for (const char* name : {"torus_knot", "columns", "hairball", "grass", "window_wall"}) {
         const penumbra::test::SceneMap map = penumbra::test::sceneMap(name, 256);
-        const uint64_t adaptive = compare(name, setupOf(256, 1e-6), map.depth, exact);
-        const uint64_t fixed = compare(name, setupOf(256, 0.0, LightVolumeTessellation::Static), map.depth, exact);
+        const uint64_t adaptive = compare(name, volumeSetup(256, 1e-6), map.depth, exact);
+        const uint64_t fixed = compare(name, volumeSetup(256, 0.0, LightVolumeTessellation::Static), map.depth, exact);
         MESSAGE(std::string(name), " 256^2: GPU adaptive (flatness 1e-6) ", adaptive, " triangles, static ", fixed);
     }
     const penumbra::test::SceneMap columns = penumbra::test::sceneMap("columns", 1024);
-    compare("columns", setupOf(1024, 1e-6), columns.depth, exact);
+    compare("columns", volumeSetup(1024, 1e-6), columns.depth, exact);
 }
 
 TEST_SUITE("stress") {
@@ -157,8 +179,8 @@ TEST_SUITE("stress") {
         for (uint32_t r : {1024u, 2048u}) {
             for (const char* name : {"torus_knot", "columns", "hairball", "grass", "window_wall"}) {
                 const penumbra::test::SceneMap map = penumbra::test::sceneMap(name, r);
-                const uint64_t adaptive = compare(name, setupOf(r, 1e-6), map.depth, exact);
-                const uint64_t fixed = compare(name, setupOf(r, 0.0, LightVolumeTessellation::Static), map.depth, exact);
+                const uint64_t adaptive = compare(name, volumeSetup(r, 1e-6), map.depth, exact);
+                const uint64_t fixed = compare(name, volumeSetup(r, 0.0, LightVolumeTessellation::Static), map.depth, exact);
                 MESSAGE(std::string(name), " ", r, "^2: GPU adaptive (flatness 1e-6) ", adaptive, " triangles, static ", fixed, " (",
                         100.0 * double(adaptive) / double(fixed), " %)");
             }
@@ -168,7 +190,7 @@ TEST_SUITE("stress") {
 
 TEST_CASE("light-volume tessellator: per-frame contract (no query, read-back, wait or allocation) and load-time errors") {
     penumbra::test::context();
-    const LightVolumeSetup setup = setupOf(64, 1e-6);
+    const LightVolumeSetup setup = volumeSetup(64, 1e-6);
     std::vector<float> depth(64 * 64);
     for (size_t t = 0; t < depth.size(); ++t) depth[t] = (t % 7 == 0) ? 0.3f : 0.8f;
     DepthTexture texture(64, depth);
@@ -318,24 +340,10 @@ std::vector<float> renderShafts(const penumbra::test::ShaftScene& scene, const p
         }
     }
     DepthTexture camera_depth(0, {}, w, h, window);
-    GLuint lit = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &lit);
-    glTextureStorage2D(lit, 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
-    const float zero[4] = {0, 0, 0, 0};
-    glClearTexImage(lit, 0, GL_RGBA, GL_FLOAT, zero);
+    LitImage lit(w, h);
     penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
-    penumbra::gl::LightVolumeView view;
-    view.camera_view_projection = camera;
-    view.eye = eye;
-    view.light_view_projection = scene.view_projection;
-    view.light_position = scene.light;
-    renderer.render(tessellator_, view, camera_depth.id, lit);
-    std::vector<glm::vec4> pixels(size_t(w) * h);
-    glGetTextureImage(lit, 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels.size()), pixels.data());
-    glDeleteTextures(1, &lit);
-    std::vector<float> out(pixels.size());
-    for (size_t i = 0; i < pixels.size(); ++i) out[i] = pixels[i].r;
-    return out;
+    renderer.render(tessellator_, shaftView(scene, camera, eye), camera_depth.id, lit.texture.id());
+    return lit.red();
 }
 
 penumbra::reference::ShadowMapLookup ShadowMapLookupNearest() { return penumbra::reference::ShadowMapLookup::Nearest; }
@@ -419,21 +427,10 @@ TEST_CASE("GPU ray-march baseline == its CPU twin (reference::rayMarchExact, nea
         used[i] = glm::length(glm::dvec3(p) / p.w - eye);
     }
     DepthTexture shadow_map(scene.r, scene.depth), camera_depth(0, {}, w, h, window);
-    GLuint lit = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &lit);
-    glTextureStorage2D(lit, 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
-    const float zero[4] = {0, 0, 0, 0};
-    glClearTexImage(lit, 0, GL_RGBA, GL_FLOAT, zero);
+    LitImage lit(w, h);
     penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
-    penumbra::gl::LightVolumeView view;
-    view.camera_view_projection = camera;
-    view.eye = eye;
-    view.light_view_projection = scene.view_projection;
-    view.light_position = scene.light;
-    renderer.rayMarch(shadow_map.id, scene.r, steps, view, camera_depth.id, lit);
-    std::vector<glm::vec4> pixels(dirs.size());
-    glGetTextureImage(lit, 0, GL_RGBA, GL_FLOAT, GLsizei(16 * pixels.size()), pixels.data());
-    glDeleteTextures(1, &lit);
+    renderer.rayMarch(shadow_map.id, scene.r, steps, shaftView(scene, camera, eye), camera_depth.id, lit.texture.id());
+    const std::vector<float> pixels = lit.red();
     penumbra::reference::ShadowMapView map;
     map.view_projection = scene.view_projection;
     map.resolution = scene.r;
@@ -447,7 +444,7 @@ TEST_CASE("GPU ray-march baseline == its CPU twin (reference::rayMarchExact, nea
             [&](const glm::dvec3& x) { return penumbra::reference::shadowMapLit(map, ShadowMapLookupNearest(), x); },
             [&](double t) { return penumbra::airlight<double>(airlight, eye, dirs[i], scene.light, t); });
         peak = std::max(peak, cpu);
-        errors.push_back(std::abs(double(pixels[i].r) - cpu));
+        errors.push_back(std::abs(double(pixels[i]) - cpu));
     }
     std::sort(errors.begin(), errors.end());
     const double p99 = errors[errors.size() * 99 / 100], worst = errors.back();
@@ -470,15 +467,10 @@ TEST_CASE("light-volume renderer: per-frame contract of render() and rayMarch() 
     volume.tessellate(shadow_map.id);
     std::vector<float> window(size_t(w) * h, 1.0f);
     DepthTexture camera_depth(0, {}, w, h, window);
-    GLuint lit = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &lit);
-    glTextureStorage2D(lit, 1, GL_RGBA32F, GLsizei(w), GLsizei(h));
+    LitImage image(w, h);
+    const GLuint lit = image.texture.id();
     penumbra::gl::LightVolumeRenderer renderer(w, h, airlight);
-    penumbra::gl::LightVolumeView view;
-    view.camera_view_projection = penumbra::test::cameraViewProjection(eye, target, w, h);
-    view.eye = eye;
-    view.light_view_projection = scene.view_projection;
-    view.light_position = scene.light;
+    const penumbra::gl::LightVolumeView view = shaftView(scene, penumbra::test::cameraViewProjection(eye, target, w, h), eye);
     // Warm-up: lazy driver compiles, first-use state.
     renderer.render(volume, view, camera_depth.id, lit);
     renderer.rayMarch(shadow_map.id, scene.r, 16, view, camera_depth.id, lit);
@@ -495,7 +487,6 @@ TEST_CASE("light-volume renderer: per-frame contract of render() and rayMarch() 
         CHECK(glGetError() == GL_INVALID_ENUM);
         CHECK(glGetError() == GL_NO_ERROR);
     }
-    glDeleteTextures(1, &lit);
 
     // Load-time errors, each naming the value.
     CHECK_THROWS_WITH_AS(penumbra::gl::LightVolumeRenderer(0, 4, airlight), doctest::Contains("viewport 0x4"), penumbra::Error);

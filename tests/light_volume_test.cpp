@@ -31,6 +31,7 @@ using penumbra::LightVolumeMesh;
 using penumbra::LightVolumeOptions;
 using penumbra::LightVolumeSetup;
 using penumbra::LightVolumeTessellation;
+using penumbra::test::volumeSetup;
 using penumbra::test::SceneMap;
 using penumbra::test::TestLight;
 using penumbra::test::sceneMap;
@@ -140,13 +141,6 @@ void checkVolume(const std::string& what, const LightVolumeSetup& setup, const s
     if (out) *out = std::move(mesh);
 }
 
-LightVolumeSetup setupOf(uint32_t r, double flatness, LightVolumeTessellation mode = LightVolumeTessellation::Adaptive) {
-    LightVolumeOptions options;
-    options.flatness = flatness;
-    options.tessellation = mode;
-    return penumbra::lightVolumeSetup(r, options);
-}
-
 }  // namespace
 
 TEST_CASE("light volume setup and corner depths: bad input named") {
@@ -180,7 +174,7 @@ TEST_CASE("light volume: planes become one cell, exactly; corners extrapolate pl
         std::vector<float> depth(size_t(r) * r);
         for (uint32_t y = 0; y < r; ++y)
             for (uint32_t x = 0; x < r; ++x) depth[size_t(y) * r + x] = 0.25f + float(x) * 0x1p-13f + float(y) * 0x1p-14f;
-        const LightVolumeSetup setup = setupOf(r, 0.0);
+        const LightVolumeSetup setup = volumeSetup(r, 0.0);
         const std::vector<float> corners = penumbra::lightVolumeCornerDepths(setup, depth);
         for (uint32_t j = 0; j <= r; ++j)
             for (uint32_t i = 0; i <= r; ++i)
@@ -197,7 +191,7 @@ TEST_CASE("light volume: planes become one cell, exactly; corners extrapolate pl
     for (uint32_t y = 0; y < r; ++y)
         for (uint32_t x = 0; x < r; ++x) depth[size_t(y) * r + x] = 0.5f + float(std::min(x, 40u)) * 0x1p-10f + float(y) * 0x1p-12f;
     LightVolumeMesh mesh;
-    checkVolume("crease", setupOf(r, 0.0), depth, light, &mesh);
+    checkVolume("crease", volumeSetup(r, 0.0), depth, light, &mesh);
     CHECK(mesh.floor_triangles < 2 * r * r / 5);  // a column of unit cells along the crease, graded away
     MESSAGE("crease at 64^2: ", mesh.floor_triangles, " floor triangles (static ", 2 * r * r, "), ", mesh.leaves, " leaves, ",
             mesh.stitched_leaves, " stitched");
@@ -212,7 +206,7 @@ TEST_CASE("light volume: a saddle (zero Laplacian) is subdivided; the flatness b
             depth[size_t(y) * r + x] = 0.5f + (float(x) - 16.0f) * (float(y) - 16.0f) * 0x1p-12f;  // z = xy: Laplacian 0
     for (double flatness : {0.0, 1e-3, 1e-2, 0.3}) {
         LightVolumeMesh mesh;
-        checkVolume("saddle", setupOf(r, flatness), depth, light, &mesh);
+        checkVolume("saddle", volumeSetup(r, flatness), depth, light, &mesh);
         if (flatness == 0.0) CHECK(mesh.leaves > 1);
         if (flatness == 0.3) CHECK(mesh.leaves == 1);  // the root's fourth corner is 4 * 16.5^2 * 2^-12 = 0.266 off its plane
         MESSAGE("saddle 32^2, flatness ", flatness, ": ", mesh.floor_triangles, " floor triangles");
@@ -247,7 +241,7 @@ TEST_CASE("light volume: random maps (steps, ramps, noise, constant 0 and 1) are
             }
             const double flatness = (rng() % 3 == 0) ? 0.0 : std::pow(10.0, -1.0 - 5.0 * unit(rng));
             LightVolumeMesh mesh;
-            checkVolume("random kind " + std::to_string(kind), setupOf(r, flatness), depth, light, &mesh);
+            checkVolume("random kind " + std::to_string(kind), volumeSetup(r, flatness), depth, light, &mesh);
             if (kind == 3) CHECK(mesh.leaves == 1);
             ++cases;
             leaves += mesh.leaves;
@@ -263,10 +257,10 @@ void builtinScenes(uint32_t r, const std::vector<std::string>& names) {
     for (const std::string& name : names) {
         const SceneMap map = sceneMap(name, r);
         LightVolumeMesh adaptive, exact, coarse, fixed;
-        checkVolume(name + " static", setupOf(r, 0.0, LightVolumeTessellation::Static), map.depth, map.light, &fixed);
-        checkVolume(name + " adaptive 0", setupOf(r, 0.0), map.depth, map.light, &exact);
-        checkVolume(name + " adaptive 1e-6", setupOf(r, 1e-6), map.depth, map.light, &adaptive);
-        checkVolume(name + " adaptive 1e-4", setupOf(r, 1e-4), map.depth, map.light, &coarse);
+        checkVolume(name + " static", volumeSetup(r, 0.0, LightVolumeTessellation::Static), map.depth, map.light, &fixed);
+        checkVolume(name + " adaptive 0", volumeSetup(r, 0.0), map.depth, map.light, &exact);
+        checkVolume(name + " adaptive 1e-6", volumeSetup(r, 1e-6), map.depth, map.light, &adaptive);
+        checkVolume(name + " adaptive 1e-4", volumeSetup(r, 1e-4), map.depth, map.light, &coarse);
         MESSAGE(name, " ", r, "^2 floor triangles: static ", fixed.floor_triangles, ", adaptive flatness 0: ", exact.floor_triangles,
                 " (", 100.0 * exact.floor_triangles / fixed.floor_triangles, " %), 1e-6: ", adaptive.floor_triangles, " (",
                 100.0 * adaptive.floor_triangles / fixed.floor_triangles, " %), 1e-4: ", coarse.floor_triangles, " (",

@@ -1,11 +1,12 @@
 // Test helper: shadow maps for the light-volume tests — a synthetic light over the unit square
 // and the built-in scenes' depth maps, ray cast with the oracle (texel centres, post-projective
 // depth in [0, 1], 1 where nothing is hit), and a synthetic shaft scene (a square caster over the
-// ground under a spot light) with a camera and a fog for the render tests.
+// ground under a spot light) with a camera and a fog for the render tests; volumeSetup() for short.
 #ifndef PENUMBRA_TESTS_LIGHT_VOLUME_MAPS_HPP
 #define PENUMBRA_TESTS_LIGHT_VOLUME_MAPS_HPP
 
 #include <penumbra/airlight.hpp>
+#include <penumbra/light_volume.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/reference/visibility.hpp>
 #include <penumbra/scene/scene.hpp>
@@ -20,6 +21,14 @@
 #include <vector>
 
 namespace penumbra::test {
+
+/// lightVolumeSetup(r) with the given flatness and tessellation.
+inline LightVolumeSetup volumeSetup(uint32_t r, double flatness, LightVolumeTessellation mode = LightVolumeTessellation::Adaptive) {
+    LightVolumeOptions options;
+    options.flatness = flatness;
+    options.tessellation = mode;
+    return lightVolumeSetup(r, options);
+}
 
 /// A light looking down -y at the unit square, for synthetic maps.
 struct TestLight {

@@ -37,7 +37,6 @@
 #include "penumbra/gl/shader.hpp"
 
 #include <array>
-#include <chrono>
 #include <string>
 #include <vector>
 
@@ -149,31 +148,20 @@ public:
     ~DeepShadowMapBuilder() {
         if (vao_) glDeleteVertexArrays(1, &vao_);
         if (fbo_) glDeleteFramebuffers(1, &fbo_);
-        if (queries_[0]) glDeleteQueries(4, queries_);
     }
 
     /// Load time: makes build() bracket its four stages (rasterize = count + scan + scatter, sort,
     /// merge + compress, mips) with GL_TIME_ELAPSED queries, or, with wall_clock (drivers whose
     /// queries do not measure durations, e.g. llvmpipe), with glFinish + the wall clock — which
     /// synchronises the frame: a tool's setting, never an engine's.
-    void enableStageTimers(bool wall_clock = false) {
-        if (!queries_[0]) glCreateQueries(GL_TIME_ELAPSED, 4, queries_);
-        wall_clock_ = wall_clock;
-    }
+    void enableStageTimers(bool wall_clock = false) { timers_.enable(wall_clock); }
     /// Read-back of the last build's stage times (waits for the GPU).
     DsmStageTimes stageTimes() const {
         DsmStageTimes t;
-        if (!queries_[0]) return t;
-        double* out[4] = {&t.rasterize, &t.sort, &t.merge_compress, &t.mips};
-        if (wall_clock_) {
-            for (int i = 0; i < 4; ++i) *out[i] = wall_ms_[i];
-            return t;
-        }
-        for (int i = 0; i < 4; ++i) {
-            GLuint64 ns = 0;
-            glGetQueryObjectui64v(queries_[i], GL_QUERY_RESULT, &ns);
-            *out[i] = double(ns) * 1e-6;
-        }
+        t.rasterize = timers_.milliseconds(0);
+        t.sort = timers_.milliseconds(1);
+        t.merge_compress = timers_.milliseconds(2);
+        t.mips = timers_.milliseconds(3);
         return t;
     }
 
@@ -226,7 +214,7 @@ public:
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
         const void* first_index = reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset));
-        beginStage(0);
+        timers_.begin(0);
         glUseProgram(raster_count_.id());
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT, first_index);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -236,19 +224,19 @@ public:
         glUseProgram(raster_scatter_.id());
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT, first_index);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        endStage();
+        timers_.end();
 
         // 4: sort.
-        beginStage(1);
+        timers_.begin(1);
         dispatch(sort_, lists_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        endStage();
+        timers_.end();
 
         // 5-6: merge + compress (level 0), then every mip level.
         for (uint32_t level = 0; level < s.levels; ++level) {
             const uint32_t r = s.level_resolution[level];
             const uint64_t word = s.level_texel_offset[level] + level;
-            if (level <= 1) beginStage(level == 0 ? 2 : 3);
+            if (level <= 1) timers_.begin(level == 0 ? 2 : 3);
             bindLevel(level);
             const Program* programs = level == 0 ? merge_ : mip_;
             dispatch(programs[0], uint64_t(r) * r);
@@ -259,11 +247,11 @@ public:
             bindAll(casters, level);
             dispatch(programs[1], uint64_t(r) * r);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            if (level == 0 || level + 1 == s.levels) endStage();
+            if (level == 0 || level + 1 == s.levels) timers_.end();
         }
-        if (s.levels == 1 && queries_[0]) {  // an empty mips stage
-            beginStage(3);
-            endStage();
+        if (s.levels == 1 && timers_.enabled()) {  // an empty mips stage
+            timers_.begin(3);
+            timers_.end();
         }
     }
 
@@ -358,25 +346,6 @@ public:
     }
 
 private:
-    void beginStage(int i) {
-        if (!queries_[0]) return;
-        stage_ = i;
-        if (wall_clock_) {
-            glFinish();
-            stage_start_ = std::chrono::steady_clock::now();
-        } else {
-            glBeginQuery(GL_TIME_ELAPSED, queries_[i]);
-        }
-    }
-    void endStage() {
-        if (!queries_[0]) return;
-        if (wall_clock_) {
-            glFinish();
-            wall_ms_[stage_] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stage_start_).count();
-        } else {
-            glEndQuery(GL_TIME_ELAPSED);
-        }
-    }
     void bindLevel(uint32_t level) {
         glBindBufferRange(GL_UNIFORM_BUFFER, PENUMBRA_DSM_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(level * ubo_stride_),
                           sizeof(DsmParams));
@@ -417,11 +386,7 @@ private:
     std::vector<DsmParams> staging_;
     Program raster_count_, raster_scatter_, sort_, merge_[2], mip_[2], lookup_;
     GLuint vao_ = 0, fbo_ = 0;
-    GLuint queries_[4] = {0, 0, 0, 0};
-    bool wall_clock_ = false;
-    int stage_ = 0;
-    double wall_ms_[4] = {0, 0, 0, 0};
-    std::chrono::steady_clock::time_point stage_start_;
+    StageTimers<4> timers_;
 };
 
 }  // namespace penumbra::gl

@@ -46,7 +46,6 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <ios>
@@ -113,29 +112,17 @@ public:
     LightVolumeTessellator& operator=(const LightVolumeTessellator&) = delete;
     ~LightVolumeTessellator() {
         if (sampler_) glDeleteSamplers(1, &sampler_);
-        if (queries_[0]) glDeleteQueries(2, queries_);
     }
 
     /// Load time: bracket the two stages with GL_TIME_ELAPSED queries, or (wall_clock: drivers whose
     /// queries do not measure durations, e.g. llvmpipe) with glFinish + the wall clock, which
     /// synchronises the frame: a tool's setting, never an engine's.
-    void enableStageTimers(bool wall_clock = false) {
-        if (!queries_[0]) glCreateQueries(GL_TIME_ELAPSED, 2, queries_);
-        wall_clock_ = wall_clock;
-    }
+    void enableStageTimers(bool wall_clock = false) { timers_.enable(wall_clock); }
     /// Read-back of the last tessellation's stage times (waits for the GPU).
     LightVolumeStageTimes stageTimes() const {
         LightVolumeStageTimes t;
-        if (!queries_[0]) return t;
-        if (wall_clock_) {
-            t.edge_map = wall_ms_[0];
-            t.tessellate = wall_ms_[1];
-            return t;
-        }
-        GLuint64 ns[2] = {0, 0};
-        for (int i = 0; i < 2; ++i) glGetQueryObjectui64v(queries_[i], GL_QUERY_RESULT, &ns[i]);
-        t.edge_map = double(ns[0]) * 1e-6;
-        t.tessellate = double(ns[1]) * 1e-6;
+        t.edge_map = timers_.milliseconds(0);
+        t.tessellate = timers_.milliseconds(1);
         return t;
     }
 
@@ -150,7 +137,7 @@ public:
     void tessellate(GLuint depth_texture) {
         const uint32_t r = setup_.resolution, levels = setup_.levels;
         const uint32_t zero = 0;
-        beginStage(0);
+        timers_.begin(0);
         glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glBindTextureUnit(PENUMBRA_LV_DEPTH_UNIT, depth_texture);
         glBindSampler(PENUMBRA_LV_DEPTH_UNIT, sampler_);
@@ -168,8 +155,8 @@ public:
             dispatch(flags_program_, uint64_t(r >> k) * (r >> k) * ((1ull << k) + 1));  // a row of every cell
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
-        endStage();
-        beginStage(1);
+        timers_.end();
+        timers_.begin(1);
         bindLevel(0);
         dispatch(emit_program_[0], items_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -182,7 +169,7 @@ public:
         glUseProgram(indirect_program_.id());
         glDispatchCompute(1, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-        endStage();
+        timers_.end();
     }
 
     /// Read-backs (tests and tools only): the mesh as the CPU twin returns it, the lattice depths.
@@ -222,26 +209,6 @@ private:
         glUseProgram(program.id());
         glDispatchCompute(grid.x, grid.y, 1);
     }
-    void beginStage(int stage) {
-        if (!queries_[0]) return;
-        if (wall_clock_) {
-            glFinish();
-            stage_start_ = std::chrono::steady_clock::now();
-        } else {
-            glBeginQuery(GL_TIME_ELAPSED, queries_[stage]);
-        }
-        stage_ = stage;
-    }
-    void endStage() {
-        if (!queries_[0]) return;
-        if (wall_clock_) {
-            glFinish();
-            wall_ms_[stage_] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stage_start_).count();
-        } else {
-            glEndQuery(GL_TIME_ELAPSED);
-        }
-    }
-
     LightVolumeSetup setup_;
     Scanner scanner_;
     uint64_t cells_ = 0, items_ = 0;
@@ -249,11 +216,7 @@ private:
     Buffer corners_, flags_, counts_, triangles_, indirect_, params_;
     Program corners_program_, flags_program_, restrict_program_, emit_program_[2], indirect_program_;
     GLuint sampler_ = 0;
-    GLuint queries_[2] = {0, 0};
-    bool wall_clock_ = false;
-    int stage_ = 0;
-    double wall_ms_[2] = {0, 0};
-    std::chrono::steady_clock::time_point stage_start_{};
+    StageTimers<2> timers_;
 };
 
 /// What one frame of the render needs besides the volume: the camera and the light, in double (the

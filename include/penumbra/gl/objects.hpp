@@ -1,5 +1,5 @@
 // penumbra — small RAII owners for the GL objects penumbra's own helpers, tests and benchmarks
-// create (buffers, textures, timer queries). Blocks never force these on an engine: block APIs
+// create (buffers, textures, timer queries, executors' stage timers). Blocks never force these on an engine: block APIs
 // take raw GLuint names the caller owns; these classes are a convenience for callers that have
 // no wrapper of their own.
 //
@@ -9,6 +9,7 @@
 
 #include "penumbra/gl/gl.hpp"
 
+#include <chrono>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -185,6 +186,61 @@ public:
 
 private:
     GLuint id_ = 0;
+};
+
+/// An executor's optional per-stage timers (a tool's setting, never an engine's): off until
+/// enable(); then begin(i) / end() bracket stage i < N with a GL_TIME_ELAPSED query or, with
+/// wall_clock (drivers whose queries do not measure durations, e.g. llvmpipe), with glFinish + the
+/// wall clock, which synchronises the frame. Stages must not nest; a stage not run keeps its last
+/// time. While off, begin() and end() do nothing.
+template <int N>
+class StageTimers {
+public:
+    StageTimers() = default;
+    StageTimers(const StageTimers&) = delete;
+    StageTimers& operator=(const StageTimers&) = delete;
+    ~StageTimers() {
+        if (queries_[0]) glDeleteQueries(N, queries_);
+    }
+    void enable(bool wall_clock) {
+        if (!queries_[0]) glCreateQueries(GL_TIME_ELAPSED, N, queries_);
+        wall_clock_ = wall_clock;
+    }
+    bool enabled() const { return queries_[0] != 0; }
+    void begin(int i) {
+        if (!queries_[0]) return;
+        stage_ = i;
+        if (wall_clock_) {
+            glFinish();
+            start_ = std::chrono::steady_clock::now();
+        } else {
+            glBeginQuery(GL_TIME_ELAPSED, queries_[i]);
+        }
+    }
+    void end() {
+        if (!queries_[0]) return;
+        if (wall_clock_) {
+            glFinish();
+            wall_ms_[stage_] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count();
+        } else {
+            glEndQuery(GL_TIME_ELAPSED);
+        }
+    }
+    /// Stage i's last time in milliseconds (waits for the GPU); 0 while off.
+    double milliseconds(int i) const {
+        if (!queries_[0]) return 0.0;
+        if (wall_clock_) return wall_ms_[i];
+        GLuint64 ns = 0;
+        glGetQueryObjectui64v(queries_[i], GL_QUERY_RESULT, &ns);
+        return double(ns) * 1e-6;
+    }
+
+private:
+    GLuint queries_[N] = {};
+    bool wall_clock_ = false;
+    int stage_ = 0;
+    double wall_ms_[N] = {};
+    std::chrono::steady_clock::time_point start_{};
 };
 
 }  // namespace penumbra::gl
