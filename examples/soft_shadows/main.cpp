@@ -256,7 +256,7 @@ const ModeFlag kModeFlags[] = {
 };
 
 void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
-    app.add_option("--scene", a.scene, "builtin:NAME (torus_knot, columns, hairball, grass; window_wall: columns behind a wall with windows, for --mode volumetric) or PATH.obj")
+    app.add_option("--scene", a.scene, "builtin:NAME (torus_knot, columns, hairball, grass; window_wall: columns beside a wall with windows, for --mode volumetric) or PATH.obj")
         ->type_name("SCENE")
         ->capture_default_str();
     app.add_option("--light-pos", raw.light_pos, "light centre x,y,z (default: the scene's)")->type_name("X,Y,Z");

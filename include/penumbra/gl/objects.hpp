@@ -1,7 +1,7 @@
 // penumbra — small RAII owners for the GL objects penumbra's own helpers, tests and benchmarks
-// create (buffers, textures, timer queries, executors' stage timers). Blocks never force these on an engine: block APIs
-// take raw GLuint names the caller owns; these classes are a convenience for callers that have
-// no wrapper of their own.
+// create (buffers, textures, timer queries, executors' stage timers). Blocks never force these on
+// an engine: block APIs take raw GLuint names the caller owns; these classes are a convenience for
+// callers that have no wrapper of their own.
 //
 // needs: a current GL 4.5 context (DSA entry points); PENUMBRA_GL_HEADER (see gl.hpp).
 #ifndef PENUMBRA_GL_OBJECTS_HPP

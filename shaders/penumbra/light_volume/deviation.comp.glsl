@@ -33,8 +33,7 @@ void main() {
         if (j == 0u) penumbraLvFlags[flag] = 1u;
         return;
     }
-    if (penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy) ||
-        penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy + 1) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy + 1)) {
+    if (penumbraLvAnyChild(k, cx, cy)) {
         if (j == 0u) penumbraLvFlags[flag] = 1u;  // closure
         return;
     }

@@ -19,6 +19,12 @@ bool penumbraLvSubdivided(uint k, int cx, int cy) {
     return penumbraLvFlags[penumbraLvOffset(k) + uint(cy) * uint(cells) + uint(cx)] != 0u;
 }
 
+/// Closure's test: some child of cell (cx, cy) of level k >= 1 is subdivided.
+bool penumbraLvAnyChild(uint k, int cx, int cy) {
+    return penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy) ||
+           penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy + 1) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy + 1);
+}
+
 uint penumbraLvPack(uint i, uint j) { return i | (j << 16u); }
 
 /// The size of the leaf holding unit cell (ux, uy).

@@ -13,11 +13,6 @@ layout(std430, binding = PENUMBRA_LV_BINDING_FLAGS) buffer PenumbraLvFlagsBuffer
 
 #include "penumbra/light_volume/light_volume.glsl"
 
-bool penumbraLvAnyChild(uint k, int cx, int cy) {
-    return penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy) ||
-           penumbraLvSubdivided(k - 1u, 2 * cx, 2 * cy + 1) || penumbraLvSubdivided(k - 1u, 2 * cx + 1, 2 * cy + 1);
-}
-
 void main() {
     const uint k = penumbraLvParams.size.z, cells = penumbraLvCells(k);
     const uint index = penumbraLinearGroup() * PENUMBRA_LV_GROUP_SIZE + gl_LocalInvocationID.x;
