@@ -121,11 +121,12 @@ uvec4 penumbraLutValidMask(PenumbraLutParams p, uint table) {
     return m;
 }
 
-// lightLutLookup: the centre mask of the plane's cell (complemented when flipped) and, for a
-// certified LUT, its uncertain mask (0 for a seed-mode LUT and for trivial planes).
-uvec4 penumbraLutLookup(vec4 plane, uint table, out uvec4 uncertain) {
+// lightLutLookup for a located cell: the centre mask of table `table` at the cell (complemented
+// when flipped) and, for a certified LUT, its uncertain mask (0 for a seed-mode LUT and for
+// trivial planes). The cell does not depend on the table: a caller looking one plane up in several
+// tables (a set of more than 128 samples) locates it once.
+uvec4 penumbraLutLookupCell(PenumbraLutCell cell, uint table, out uvec4 uncertain) {
     const PenumbraLutParams p = PENUMBRA_LUT_PARAMS;
-    const PenumbraLutCell cell = penumbraLutLocate(p, plane);
     const uvec4 valid = penumbraLutValidMask(p, table);
     uncertain = uvec4(0u);
     if (cell.trivial != 0) return cell.trivial > 0 ? valid : uvec4(0u);
@@ -134,6 +135,11 @@ uvec4 penumbraLutLookup(vec4 plane, uint table, out uvec4 uncertain) {
     if ((p.flags & uint(PENUMBRA_LUT_FLAG_CERTIFIED)) != 0u) uncertain = PENUMBRA_LUT_LOAD(p.uncertain_offset + index);
     if (cell.flip) centre = ~centre & valid;
     return centre;
+}
+
+// lightLutLookup: penumbraLutLookupCell at the plane's cell.
+uvec4 penumbraLutLookup(vec4 plane, uint table, out uvec4 uncertain) {
+    return penumbraLutLookupCell(penumbraLutLocate(PENUMBRA_LUT_PARAMS, plane), table, uncertain);
 }
 
 // Seed mode (centre sampling): the samples behind the cell's centre plane.

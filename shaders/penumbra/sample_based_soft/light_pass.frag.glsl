@@ -306,11 +306,18 @@ void main() {
             }
             continue;
         }
+        // Each plane's LUT cell is the same in every table of the set: located once per pair, not
+        // once per 128-sample block (N = 1024: 4 locations instead of 32).
+        PenumbraLutCell cells[4];
+        for (int i = 0; i < 4; ++i) cells[i] = penumbraLutLocate(P.lut, vec4(planes[i].plane));
         for (uint block = 0u; block < tables; ++block) {
             const uint table = set * tables + block;
             if (mode == PENUMBRA_SBS_MODE_LUT) {
                 uvec4 m = uvec4(0xFFFFFFFFu);
-                for (int i = 0; i < 4; ++i) m &= penumbraLutBehind(vec4(planes[i].plane), table);
+                for (int i = 0; i < 4; ++i) {
+                    uvec4 unused;
+                    m &= penumbraLutLookupCell(cells[i], table, unused);
+                }
                 for (uint w = 0u; w < 4u && block * 4u + w < words; ++w)
                     if (m[w] != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m[w]);
                 continue;
@@ -320,7 +327,7 @@ void main() {
             for (int i = 0; i < 4; ++i) {
                 uvec4 c_i = uvec4(0u), u_i = valid;
                 if (planes[i].proven) {
-                    c_i = penumbraLutBehindCertified(vec4(planes[i].plane), table, u_i);
+                    c_i = penumbraLutLookupCell(cells[i], table, u_i) & ~u_i;  // penumbraLutBehindCertified
                 } else {
                     ++unproven_planes;
                 }
