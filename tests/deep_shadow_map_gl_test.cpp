@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -66,6 +67,13 @@ DsmLight lightFor(const Casters& c) {
     return light;
 }
 
+/// The GPU side of an opacity hook: the builder's shader library (the default hook or a replaced
+/// one) and the texture the default hook reads (0: none).
+struct HookGpu {
+    const penumbra::ShaderLibrary* library = nullptr;
+    GLuint texture = 0;
+};
+
 struct Run {
     DsmFragmentsCpu gpu_fragments;
     DsmMapCpu gpu_map;
@@ -73,11 +81,13 @@ struct Run {
 };
 
 Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c,
-           penumbra::gl::DsmCapacity capacity = {}, const penumbra::DsmMedium& medium = {}) {
-    penumbra::gl::DeepShadowMapBuilder builder(setup, capacity);
+           penumbra::gl::DsmCapacity capacity = {}, const penumbra::DsmMedium& medium = {}, const HookGpu& hook = {}) {
+    penumbra::gl::DeepShadowMapBuilder builder(setup, capacity,
+                                               hook.library ? *hook.library : penumbra::ShaderLibrary::embedded());
     penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(c.positions);
     penumbra::gl::Buffer indices = penumbra::gl::Buffer::fromVector(c.indices);
     penumbra::gl::Buffer vertex_opacity = penumbra::gl::Buffer::fromVector(opacity.per_vertex);
+    penumbra::gl::Buffer hook_attribute = penumbra::gl::Buffer::fromVector(opacity.hook_attribute);
     std::vector<glm::vec4> tri;
     for (const auto& a : opacity.per_triangle) tri.emplace_back(a, 0.0f);
     penumbra::gl::Buffer triangle_opacity = penumbra::gl::Buffer::fromVector(tri);
@@ -87,6 +97,11 @@ Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpac
     casters.index_count = static_cast<uint32_t>(c.indices.size());
     if (!opacity.per_vertex.empty()) casters.vertex_opacity = {vertex_opacity.id(), 0, vertex_opacity.size()};
     if (!opacity.per_triangle.empty()) casters.triangle_opacity = {triangle_opacity.id(), 0, triangle_opacity.size()};
+    if (opacity.hook) {
+        casters.opacity_hook = true;
+        casters.hook_attribute = {hook_attribute.id(), 0, hook_attribute.size()};
+        casters.opacity_texture = hook.texture;
+    }
     // Poison the outputs first: nothing may survive from before the build.
     const uint32_t poison = 0xDEADBEEFu;
     glClearNamedBufferData(builder.vertices().buffer, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &poison);
@@ -102,10 +117,10 @@ Run runGpu(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpac
 }
 
 void compareRun(const penumbra::DsmSetup& setup, const DsmLight& light, const DsmOpacity& opacity, const Casters& c,
-                const penumbra::DsmMedium& medium = {}) {
+                const penumbra::DsmMedium& medium = {}, const HookGpu& hook = {}) {
     const DsmFragmentsCpu cpu_fragments = penumbra::buildDsmFragmentsCpu(setup, light, c.positions, c.indices, opacity);
     const DsmMapCpu cpu_map = penumbra::buildDsmMapCpu(setup, cpu_fragments, true, light, medium);
-    const Run gpu = runGpu(setup, light, opacity, c, {}, medium);
+    const Run gpu = runGpu(setup, light, opacity, c, {}, medium, hook);
     CHECK(gpu.status.fragment_overflow == 0);
     CHECK(gpu.status.vertex_overflow == 0);
     CHECK(gpu.status.fragments == cpu_fragments.fragments.size());
@@ -227,6 +242,78 @@ TEST_CASE("GPU deep shadow map == CPU twin: hairball inside a participating medi
     medium.sigma_t = 2.0f / glm::length(b.size());
     medium.samples = 6;
     compareRun(setup, lightFor(c), op, c, medium);
+}
+
+/// Texture coordinates for the hook tests: world x, y scaled so that the casters span a few
+/// repeats of the texture (negative and beyond 1 included), z kept.
+std::vector<glm::vec3> hookCoordinates(const Casters& c, float repeats) {
+    penumbra::scene::Bounds b;
+    for (const auto& p : c.positions) b.extend(p);
+    std::vector<glm::vec3> uv;
+    for (const auto& p : c.positions)
+        uv.emplace_back((p.x - b.center().x) / b.size().x * repeats, (p.y - b.center().y) / b.size().y * repeats, p.z);
+    return uv;
+}
+
+TEST_CASE("GPU deep shadow map == CPU twin: opacity from the default hook (RGB32F texture, repeat, clamping), colour") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::hairball(1200, 4, false));
+    DsmOptions o;
+    o.resolution = 64;
+    o.samples = 9;
+    o.channels = 3;
+    o.levels = 0;
+    o.tolerance = 1.0f / 32.0f;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    // 8 x 4 random texels; a few outside [0, 1] and one NaN exercise the clamp (NaN -> 0).
+    penumbra::DsmOpacityTexture texture;
+    texture.width = 8;
+    texture.height = 4;
+    std::mt19937 rng(2000);
+    std::uniform_real_distribution<float> u(-0.25f, 1.25f);
+    for (uint32_t i = 0; i < 32; ++i) texture.texels.emplace_back(u(rng), u(rng), u(rng));
+    texture.texels[5].y = std::numeric_limits<float>::quiet_NaN();
+    penumbra::gl::Texture gl_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(gl_texture.id(), 1, GL_RGB32F, 8, 4);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTextureSubImage2D(gl_texture.id(), 0, 0, 0, 8, 4, GL_RGB, GL_FLOAT, texture.texels.data());
+    DsmOpacity op;
+    op.mesh = glm::vec3(1.0f);
+    op.hook_attribute = hookCoordinates(c, 3.0f);
+    op.hook = [&texture](uint32_t, const glm::vec3& a) { return penumbra::dsmOpacityTexel(texture, a); };
+    HookGpu hook;
+    hook.texture = gl_texture.id();
+    compareRun(setup, lightFor(c), op, c, {}, hook);
+}
+
+TEST_CASE("GPU deep shadow map == CPU twin: a replaced opacity hook (the engine's own opacity_hook.glsl)") {
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::grass(600, 3, false));
+    DsmOptions o;
+    o.resolution = 64;
+    o.samples = 4;
+    o.channels = 3;
+    o.levels = 2;
+    o.tolerance = 1.0f / 16.0f;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    // A procedural material: by triangle (values -0.25 .. 1.25: clamped) and a stripe of the
+    // interpolated attribute. Every operation is exact or a single rounding in both languages.
+    penumbra::ShaderLibrary library = penumbra::ShaderLibrary::embedded();
+    library.add("penumbra/deep_shadow_map/opacity_hook.glsl", R"(
+vec3 penumbraDsmOpacityHook(uint triangle, vec3 coordinates) {
+    float stripe = fract(coordinates.x) < 0.5 ? 0.75 : 0.25;
+    return vec3(float(triangle % 7u) * 0.25 - 0.25, stripe, 0.5);
+}
+)");
+    DsmOpacity op;
+    op.hook_attribute = hookCoordinates(c, 5.0f);
+    op.hook = [](uint32_t triangle, const glm::vec3& a) {
+        const float stripe = a.x - std::floor(a.x) < 0.5f ? 0.75f : 0.25f;
+        return glm::vec3(static_cast<float>(triangle % 7u) * 0.25f - 0.25f, stripe, 0.5f);
+    };
+    HookGpu hook;
+    hook.library = &library;
+    compareRun(setup, lightFor(c), op, c, {}, hook);
 }
 
 TEST_CASE("GPU deep shadow map lookups == dsmLookup (bilinear, trilinear, border)") {

@@ -1187,6 +1187,100 @@ TEST_CASE("deep shadow map: opacity per mesh, per triangle, per vertex") {
     }
 }
 
+TEST_CASE("deep shadow map: the default opacity hook's texel (repeat, nearest, non-finite -> texel 0)") {
+    penumbra::DsmOpacityTexture t;
+    t.width = 4;
+    t.height = 2;
+    for (uint32_t i = 0; i < 8; ++i) t.texels.emplace_back(static_cast<float>(i), 0.0f, 0.0f);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    // (u, v) -> texel x + 4 y, by hand: x = floor(4 frac(u)), y = floor(2 frac(v)).
+    const struct {
+        float u, v;
+        float want;
+    } cases[] = {{0.1f, 0.1f, 0},    {0.3f, 0.6f, 5},   {0.99f, 0.99f, 7},  {-0.1f, 0.1f, 3},  {-0.6f, -0.25f, 5},
+                 {1.0f, 2.0f, 0},    {3.3f, 1.75f, 5},  {nan, 0.6f, 4},     {0.6f, inf, 2},    {-inf, nan, 0},
+                 {-1e-9f, 0.6f, 4},  {0.5f, 0.5f, 6},   {0.25f, 0.0f, 1},   {1e30f, 0.6f, 4}};
+    for (const auto& c : cases) {
+        CAPTURE(c.u);
+        CAPTURE(c.v);
+        CHECK(penumbra::dsmOpacityTexel(t, vec3(c.u, c.v, 0.0f)).x == c.want);
+    }
+    CHECK(penumbra::dsmOpacityTexel(penumbra::DsmOpacityTexture{}, vec3(0.5f)) == vec3(0.0f));
+    penumbra::DsmOpacityTexture short_texture = t;
+    short_texture.texels.resize(7);  // fewer texels than width x height: read as empty
+    CHECK(penumbra::dsmOpacityTexel(short_texture, vec3(0.5f)) == vec3(0.0f));
+}
+
+TEST_CASE("deep shadow map: opacity from the hook (texture at interpolated coordinates, clamping, errors)") {
+    const DsmLight light = orthoLight();
+    const DsmSetup setup = makeSetup(8, 16);
+    const uint32_t S = 16;
+    SUBCASE("the default hook's texture, the coordinates interpolated across the quad; it wins over the rest") {
+        // u = (x + 2) / 4 on the quad [-2, 2]^2: the image's left half (px < 0, u < 0.5) reads texel
+        // 1 of a 4 x 1 texture, the right half texel 2.
+        Casters quad;
+        quad.quad(-2.0f, 2.0f, -2.0f, 2.0f, 2.0f);
+        penumbra::DsmOpacityTexture texture;
+        texture.width = 4;
+        texture.height = 1;
+        texture.texels = {vec3(0.0f), vec3(1.0f), vec3(0.25f), vec3(0.0f)};
+        DsmOpacity op;
+        op.mesh = vec3(0.5f);
+        op.per_triangle = {vec3(0.5f), vec3(0.5f)};
+        op.per_vertex = {vec3(0.5f), vec3(0.5f), vec3(0.5f), vec3(0.5f)};
+        op.hook_attribute = {vec3(0.0f, 0.0f, 0.0f), vec3(1.0f, 0.0f, 0.0f), vec3(1.0f, 1.0f, 0.0f), vec3(0.0f, 1.0f, 0.0f)};
+        op.hook = [&texture](uint32_t, const vec3& a) { return penumbra::dsmOpacityTexel(texture, a); };
+        const Built b = build(setup, light, quad, op, "hook texture");
+        uint64_t wrong = 0, checked_texels = 0;
+        for (uint32_t y = 0; y < 8; ++y)
+            for (uint32_t x = 0; x < 8; ++x) {
+                float sum = 0.0f;
+                bool near_seam = false;
+                for (uint32_t j = 0; j < S; ++j) {
+                    const double px = subSampleNdc(setup, x, y, j).x;
+                    const uint32_t k = (y * 8 + x) * S + j;
+                    wrong += b.frags.offsets[k + 1] - b.frags.offsets[k] != 1;
+                    if (std::fabs(px) < 1e-4) {  // the seam: interpolation rounding may pick either texel
+                        near_seam = true;
+                        continue;
+                    }
+                    const vec3 want = px < 0.0 ? vec3(1.0f) : vec3(0.25f);
+                    sum += want.x;
+                    wrong += b.frags.fragments[b.frags.offsets[k]].alpha != want;
+                }
+                if (near_seam) continue;
+                ++checked_texels;
+                wrong += penumbra::dsmVisibility(b.exact, 0, y * 8 + x, 3.0f) != 1.0f - sum / 16.0f;
+                wrong += penumbra::dsmVisibility(b.exact, 0, y * 8 + x, 1.0f) != 1.0f;
+            }
+        CHECK(checked_texels >= 48);
+        CHECK(wrong == 0);
+    }
+    SUBCASE("the hook's results are clamped to [0, 1] per channel, NaN -> 0; the triangle index is passed") {
+        Casters quad;
+        quad.quad(-2.0f, 2.0f, -2.0f, 2.0f, 2.0f);
+        const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+        DsmOpacity op;
+        op.hook_attribute.assign(4, vec3(0.0f));
+        op.hook = [&](uint32_t triangle, const vec3&) { return triangle == 0 ? vec3(-0.5f, nan, 2.0f) : vec3(0.5f, inf, -inf); };
+        const Built b = build(setup, light, quad, op, "hook clamp");
+        uint64_t wrong = 0;
+        for (const penumbra::DsmFragment& f : b.frags.fragments)
+            wrong += f.alpha != (f.triangle == 0 ? vec3(0.0f, 0.0f, 1.0f) : vec3(0.5f, 1.0f, 0.0f));
+        CHECK(b.frags.fragments.size() == 8 * 8 * S);
+        CHECK(wrong == 0);
+    }
+    SUBCASE("a hook without one attribute per vertex is an error naming the counts") {
+        Casters quad;
+        quad.quad(-2.0f, 2.0f, -2.0f, 2.0f, 2.0f);
+        DsmOpacity op;
+        op.hook = [](uint32_t, const vec3&) { return vec3(1.0f); };
+        op.hook_attribute.assign(3, vec3(0.0f));
+        CHECK_THROWS_WITH_AS(penumbra::buildDsmFragmentsCpu(setup, light, quad.positions, quad.indices, op),
+                             doctest::Contains("3 hook_attribute entries for 4 vertices"), penumbra::Error);
+    }
+}
+
 TEST_CASE("deep shadow map: colour transmittance, different opacity per channel") {
     const DsmLight light = orthoLight();
     const DsmSetup setup = makeSetup(4, 16, 0.0f, 3);

@@ -6,7 +6,8 @@
 //
 // Integration summary
 //   input:    casters as float positions + uint32 indices (3 per triangle) with an opacity per mesh,
-//             per triangle or per vertex (one channel, or RGB for coloured transmittance); the light
+//             per triangle, per vertex or from a hook (e.g. an alpha texture at interpolated texture
+//             coordinates; one channel, or RGB for coloured transmittance); the light
 //             as a view-projection (clip space) plus its depth row (light depth = distance along the
 //             light's axis: -z of the light's view space, for perspective and orthographic lights).
 //   produces: per level (0 = R x R, then halving) a texel offset table (exclusive scan of the vertex
@@ -85,6 +86,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -256,14 +258,52 @@ struct DsmLight {
     glm::mat4 projection{1.0f};
 };
 
-/// Opacity of the casters: per_vertex (size = vertex count) wins over per_triangle (size =
-/// triangle count), which wins over the per-mesh value. Channels beyond the map's are ignored;
-/// with 3 channels a grey opacity is (a, a, a). Every value must be finite and in [0, 1].
+/// Opacity of the casters: the hook wins over per_vertex (size = vertex count), which wins over
+/// per_triangle (size = triangle count), which wins over the per-mesh value. Channels beyond the
+/// map's are ignored; with 3 channels a grey opacity is (a, a, a). Every value of mesh,
+/// per_triangle and per_vertex must be finite and in [0, 1] (checked: penumbra::Error naming it).
+///
+/// The hook (PENUMBRA_DSM_OPACITY_HOOK) is the CPU twin of penumbraDsmOpacityHook
+/// (shaders/penumbra/deep_shadow_map/opacity_hook.glsl, which an engine replaces with its own
+/// material read): called for every covered sub-sample with the triangle's index and
+/// hook_attribute (one vec3 per vertex, e.g. texture coordinates) interpolated like the depth. Its
+/// result is clamped to [0, 1] per channel, NaN -> 0 — documented clamping, not an error, because
+/// the GPU cannot report per-sample values without a read-back. The default GLSL hook's twin is
+/// DsmOpacityTexture: `hook = [&t](uint32_t, const glm::vec3& a) { return dsmOpacityTexel(t, a); }`.
 struct DsmOpacity {
     glm::vec3 mesh{1.0f};
     std::vector<glm::vec3> per_triangle;
     std::vector<glm::vec3> per_vertex;
+    std::function<glm::vec3(uint32_t triangle, const glm::vec3& attribute)> hook;
+    std::vector<glm::vec3> hook_attribute;  ///< with the hook: one per vertex
 };
+
+/// An opacity texture as the default hook reads it (twin of the texture on unit
+/// PENUMBRA_DSM_OPACITY_TEXTURE_UNIT): width x height texels, row 0 first (GL's first row), rgb.
+/// The GPU value equals it for float textures (GL_RGB32F, GL_RGBA32F); for normalised formats the
+/// driver's conversion of the stored value applies.
+struct DsmOpacityTexture {
+    uint32_t width = 0, height = 0;
+    std::vector<glm::vec3> texels;
+};
+
+/// The default hook's read (twin of penumbraDsmOpacityHook in opacity_hook.glsl): uv =
+/// attribute.xy, repeat wrapping (the fraction u - floor(u) in float; NaN, Inf and a fraction that
+/// rounds to 1 read texel 0), nearest texel min(int(f * size), size - 1). An empty texture gives 0.
+inline glm::vec3 dsmOpacityTexel(const DsmOpacityTexture& texture, const glm::vec3& attribute) {
+    if (texture.width == 0 || texture.height == 0 ||
+        texture.texels.size() < static_cast<size_t>(texture.width) * texture.height)
+        return glm::vec3(0.0f);
+    const uint32_t size[2] = {texture.width, texture.height};
+    uint32_t texel[2];
+    for (int a = 0; a < 2; ++a) {
+        float f = attribute[a] - std::floor(attribute[a]);
+        if (!(f >= 0.0f && f < 1.0f)) f = 0.0f;
+        const float g = f * static_cast<float>(size[a]);
+        texel[a] = std::min(static_cast<uint32_t>(g), size[a] - 1);
+    }
+    return texture.texels[static_cast<size_t>(texel[1]) * texture.width + texel[0]];
+}
 
 /// An optional homogeneous participating medium (lokovic2000 §3.2: smoke, fog): an axis-aligned
 /// box with extinction sigma_t; along each sub-sample's ray, from the light's eye plane on, the
@@ -305,7 +345,8 @@ inline DsmParams deepShadowMapParams(const DsmSetup& setup, const DsmLight& ligh
     const float tol = setup.levelTolerance(level);
     p.numbers = glm::vec4(2.0f / static_cast<float>(setup.resolution), r, 1.0f / (r * r), dsmInnerTolerance(tol));
     p.capacity = glm::uvec4(0u, 0u, static_cast<uint32_t>(setup.level_texel_offset[level]), setup.level_resolution[level]);
-    p.flags = glm::uvec4(!opacity.per_vertex.empty()     ? PENUMBRA_DSM_OPACITY_VERTEX
+    p.flags = glm::uvec4(opacity.hook                    ? PENUMBRA_DSM_OPACITY_HOOK
+                         : !opacity.per_vertex.empty()   ? PENUMBRA_DSM_OPACITY_VERTEX
                          : !opacity.per_triangle.empty() ? PENUMBRA_DSM_OPACITY_TRIANGLE
                                                          : PENUMBRA_DSM_OPACITY_MESH,
                          0u, medium.active() ? medium.samples : 0u, 0u);
@@ -347,6 +388,13 @@ struct DsmMapCpu {
 };
 
 namespace detail {
+
+/// The hook's result in [0, 1] per channel, NaN -> 0 (twin of raster.frag.glsl's clamp).
+inline glm::vec3 dsmClampOpacity(const glm::vec3& a) {
+    glm::vec3 r;
+    for (int c = 0; c < 3; ++c) r[c] = a[c] >= 0.0f ? std::min(a[c], 1.0f) : 0.0f;
+    return r;
+}
 
 inline void checkOpacity(const glm::vec3& a, const char* what, size_t index) {
     for (int c = 0; c < 3; ++c)
@@ -431,6 +479,9 @@ inline DsmFragmentsCpu buildDsmFragmentsCpu(const DsmSetup& setup, const DsmLigh
     PENUMBRA_CHECK(opacity.per_triangle.empty() || opacity.per_triangle.size() == triangles,
                    "buildDsmFragmentsCpu: per_triangle opacity has ", opacity.per_triangle.size(), " entries for ",
                    triangles, " triangles");
+    PENUMBRA_CHECK(!opacity.hook || opacity.hook_attribute.size() == positions.size(),
+                   "buildDsmFragmentsCpu: the opacity hook has ", opacity.hook_attribute.size(),
+                   " hook_attribute entries for ", positions.size(), " vertices");
     detail::checkOpacity(opacity.mesh, "the mesh", 0);
     for (size_t i = 0; i < opacity.per_triangle.size(); ++i) detail::checkOpacity(opacity.per_triangle[i], "triangle", i);
     for (size_t i = 0; i < opacity.per_vertex.size(); ++i) detail::checkOpacity(opacity.per_vertex[i], "vertex", i);
@@ -476,9 +527,10 @@ inline DsmFragmentsCpu buildDsmFragmentsCpu(const DsmSetup& setup, const DsmLigh
             x1 = static_cast<uint32_t>(std::min(static_cast<float>(R - 1), std::floor(hi_x) + 1.0f));
             y1 = static_cast<uint32_t>(std::min(static_cast<float>(R - 1), std::floor(hi_y) + 1.0f));
         }
+        const bool interpolated = opacity.hook || !opacity.per_vertex.empty();
+        const std::vector<glm::vec3>& attribute = opacity.hook ? opacity.hook_attribute : opacity.per_vertex;
         glm::vec3 a_vertex[3];
-        for (int i = 0; i < 3; ++i)
-            a_vertex[i] = opacity.per_vertex.empty() ? glm::vec3(0.0f) : opacity.per_vertex[indices[3 * t + i]];
+        for (int i = 0; i < 3; ++i) a_vertex[i] = interpolated ? attribute[indices[3 * t + i]] : glm::vec3(0.0f);
         const glm::vec3 a_flat = opacity.per_triangle.empty() ? opacity.mesh : opacity.per_triangle[t];
         for (uint32_t y = y0; y <= y1; ++y)
             for (uint32_t x = x0; x <= x1; ++x)
@@ -494,11 +546,12 @@ inline DsmFragmentsCpu buildDsmFragmentsCpu(const DsmSetup& setup, const DsmLigh
                     r.key = (y * R + x) * S + j;
                     r.f.z = detail::dsmInterpolate(e0, e1, e2, tri.d[0], tri.d[1], tri.d[2]);
                     r.f.triangle = static_cast<uint32_t>(t);
-                    if (opacity.per_vertex.empty()) {
+                    if (!interpolated) {
                         r.f.alpha = a_flat;
                     } else {
                         for (int c = 0; c < 3; ++c)
                             r.f.alpha[c] = detail::dsmInterpolate(e0, e1, e2, a_vertex[0][c], a_vertex[1][c], a_vertex[2][c]);
+                        if (opacity.hook) r.f.alpha = detail::dsmClampOpacity(opacity.hook(static_cast<uint32_t>(t), r.f.alpha));
                     }
                     raw.push_back(r);
                 }

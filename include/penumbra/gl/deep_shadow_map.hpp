@@ -4,8 +4,11 @@
 // Integration summary
 //   needs:    GL 4.5 (geometry shaders for the conservative emitter); PENUMBRA_GL_HEADER; a scan
 //             block (the builder owns one Scanner); casters as a vec3 float vertex buffer range +
-//             uint32 index range (GL_TRIANGLES); optional per-vertex opacity (vec3 float range) or
-//             per-triangle opacity (vec4 float range).
+//             uint32 index range (GL_TRIANGLES); optional per-vertex opacity (vec3 float range),
+//             per-triangle opacity (vec4 float range) or the opacity hook (a vec3 float attribute
+//             range, e.g. texture coordinates, handed to penumbraDsmOpacityHook in
+//             penumbra/deep_shadow_map/opacity_hook.glsl: replace that file in your ShaderLibrary
+//             for your material, or bind an opacity texture for the default one).
 //   produces: the map in the builder's buffers (offsets(), vertices(): the layout of lookup.glsl —
 //             float z per vertex, then from word `capacity.vertices` on the 16-bit V values),
 //             plus a status block (PENUMBRA_DSM_STATUS_*: fragments dropped over the capacity,
@@ -17,7 +20,8 @@
 //             count per texel, scan, merge + compress write, 6 per mip level: average + compress
 //             count, scan, write. All decisions stay on the GPU.
 //   state:    build() binds its programs, its vertex array, its attachment-less framebuffer, the
-//             viewport R x R, uniform bindings 0-1 and storage bindings 0-7, and disables depth
+//             viewport R x R, uniform bindings 0-1, storage bindings 0-7 and, with an opacity
+//             texture, texture unit PENUMBRA_DSM_OPACITY_TEXTURE_UNIT (0), and disables depth
 //             test, culling and rasterizer discard; it restores none of these (the integrator
 //             rebinds what it uses next). It never queries GL state, never reads back and never
 //             allocates: everything is sized at construction from the capacities.
@@ -55,6 +59,16 @@ struct DsmCasterBuffers {
     uint32_t index_count = 0;
     BufferRange vertex_opacity;     ///< optional: vec3 float per vertex (PENUMBRA_DSM_OPACITY_VERTEX)
     BufferRange triangle_opacity;   ///< optional: vec4 float per triangle (PENUMBRA_DSM_OPACITY_TRIANGLE)
+    /// The opacity hook (PENUMBRA_DSM_OPACITY_HOOK; wins over the others): penumbraDsmOpacityHook
+    /// (opacity_hook.glsl, the builder's ShaderLibrary) gives the opacity of every covered
+    /// sub-sample from the triangle's index within the draw and hook_attribute interpolated like
+    /// the depth; the result is clamped to [0, 1] per channel, NaN -> 0. CPU twin: DsmOpacity::hook.
+    bool opacity_hook = false;
+    BufferRange hook_attribute;     ///< with opacity_hook: vec3 float per vertex (required)
+    /// With opacity_hook: a 2D texture build() binds to unit PENUMBRA_DSM_OPACITY_TEXTURE_UNIT for
+    /// the default hook (texelFetch at uv = attribute.xy, repeat, nearest); 0 leaves the unit alone
+    /// (a replaced hook reading its own textures).
+    GLuint opacity_texture = 0;
 };
 
 /// GPU time of the build's stages (enableStageTimers(): GL_TIME_ELAPSED queries; stageTimes() reads
@@ -177,12 +191,14 @@ public:
     /// `medium`: an optional participating medium (checkDsmMedium() it at load time).
     void build(const DsmLight& light, const DsmOpacity& opacity, const DsmCasterBuffers& casters, const DsmMedium& medium = {}) {
         PENUMBRA_ASSERT(casters.index_count % 3 == 0 && casters.indices.holds(4ull * casters.index_count));
+        PENUMBRA_ASSERT(!casters.opacity_hook || !casters.hook_attribute.empty());
         const DsmSetup& s = setup_;
         DsmOpacity source;  // only the source kind and the mesh value matter here
         source.mesh = opacity.mesh;
         for (uint32_t level = 0; level < s.levels; ++level) {
             DsmParams p = deepShadowMapParams(s, light, source, level, medium);
-            p.flags.x = !casters.vertex_opacity.empty()     ? PENUMBRA_DSM_OPACITY_VERTEX
+            p.flags.x = casters.opacity_hook                ? PENUMBRA_DSM_OPACITY_HOOK
+                        : !casters.vertex_opacity.empty()   ? PENUMBRA_DSM_OPACITY_VERTEX
                         : !casters.triangle_opacity.empty() ? PENUMBRA_DSM_OPACITY_TRIANGLE
                                                             : PENUMBRA_DSM_OPACITY_MESH;
             p.capacity.x = static_cast<uint32_t>(capacity_.fragments);
@@ -199,10 +215,12 @@ public:
 
         // 1-3: count, scan, scatter.
         glVertexArrayVertexBuffer(vao_, 0, casters.positions.buffer, static_cast<GLintptr>(casters.positions.offset), 12);
-        if (!casters.vertex_opacity.empty()) {
+        const BufferRange& attribute = casters.opacity_hook ? casters.hook_attribute : casters.vertex_opacity;
+        if (!attribute.empty()) {
             glEnableVertexArrayAttrib(vao_, 1);
-            glVertexArrayVertexBuffer(vao_, 1, casters.vertex_opacity.buffer,
-                                      static_cast<GLintptr>(casters.vertex_opacity.offset), 12);
+            glVertexArrayVertexBuffer(vao_, 1, attribute.buffer, static_cast<GLintptr>(attribute.offset), 12);
+            if (casters.opacity_hook && casters.opacity_texture != 0)
+                glBindTextureUnit(PENUMBRA_DSM_OPACITY_TEXTURE_UNIT, casters.opacity_texture);
         } else {
             glDisableVertexArrayAttrib(vao_, 1);
         }

@@ -26,6 +26,13 @@ namespace penumbra::shared {
 #define PENUMBRA_DSM_OPACITY_MESH 0      // PenumbraDsmParams::opacity
 #define PENUMBRA_DSM_OPACITY_TRIANGLE 1  // one vec4 per triangle (PENUMBRA_DSM_BINDING_TRIANGLE_OPACITY)
 #define PENUMBRA_DSM_OPACITY_VERTEX 2    // vertex attribute 1 (vec3), interpolated like the depth
+// The hook: vertex attribute 1 (vec3, e.g. texture coordinates), interpolated like the depth, handed
+// with the triangle's index to penumbraDsmOpacityHook (penumbra/deep_shadow_map/opacity_hook.glsl:
+// replace that file in your ShaderLibrary; the default reads the texture on unit
+// PENUMBRA_DSM_OPACITY_TEXTURE_UNIT at uv = attribute.xy, nearest, repeat); its result is clamped
+// to [0, 1] per channel, NaN -> 0.
+#define PENUMBRA_DSM_OPACITY_HOOK 3
+#define PENUMBRA_DSM_OPACITY_TEXTURE_UNIT 0
 
 // Default bindings (DsmBindings can move them). Uniform buffers: the conservative emitter's block
 // is binding 0 (PENUMBRA_CONSERVATIVE_PARAMS_BINDING), this block binding 1. Shader storage:

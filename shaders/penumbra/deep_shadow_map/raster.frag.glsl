@@ -1,13 +1,15 @@
 // penumbra — deep shadow map build, fragment stage: one fragment per (caster triangle, light texel
 // its conservative hull touches); tests the texel's S sub-samples against the triangle (the twin:
 // buildDsmFragmentsCpu). PENUMBRA_DSM_PASS 0 counts fragments per sub-sample list (atomicAdd), 1
-// scatters them to offsets[list] + cursor (the sample-list pattern: count, scan, scatter). No colour
-// output: bind a framebuffer with no attachments, R x R.
+// scatters them to offsets[list] + cursor (the sample-list pattern: count, scan, scatter). Opacity
+// per mesh, per triangle, per vertex or from the hook (opacity_hook.glsl). No colour output: bind a
+// framebuffer with no attachments, R x R.
 // penumbra-permutation: PENUMBRA_DSM_PASS=0 PENUMBRA_DSM_CHANNELS=1
 // penumbra-permutation: PENUMBRA_DSM_PASS=1 PENUMBRA_DSM_CHANNELS=1
 // penumbra-permutation: PENUMBRA_DSM_PASS=1 PENUMBRA_DSM_CHANNELS=3
 #include "penumbra/deep_shadow_map/deep_shadow_map_shared.h"
 #include "penumbra/deep_shadow_map/deep_shadow_map.glsl"
+#include "penumbra/deep_shadow_map/opacity_hook.glsl"
 
 #ifndef PENUMBRA_DSM_PASS
 #error penumbra/deep_shadow_map/raster.frag.glsl needs PENUMBRA_DSM_PASS (0 count, 1 scatter)
@@ -59,7 +61,14 @@ void main() {
 #else
         float z = penumbraDsmInterpolate(e0, e1, e2, penumbraDsmD.x, penumbraDsmD.y, penumbraDsmD.z);
         vec3 a;
-        if (source == uint(PENUMBRA_DSM_OPACITY_VERTEX)) {
+        if (source == uint(PENUMBRA_DSM_OPACITY_HOOK)) {
+            vec3 coordinates = vec3(penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.x, penumbraDsmA1.x, penumbraDsmA2.x),
+                                  penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.y, penumbraDsmA1.y, penumbraDsmA2.y),
+                                  penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.z, penumbraDsmA1.z, penumbraDsmA2.z));
+            a = penumbraDsmOpacityHook(penumbraDsmTriangleId, coordinates);
+            // [0, 1] per channel, NaN -> 0 (the twin's detail::dsmClampOpacity).
+            for (int c = 0; c < 3; ++c) a[c] = a[c] >= 0.0 ? min(a[c], 1.0) : 0.0;
+        } else if (source == uint(PENUMBRA_DSM_OPACITY_VERTEX)) {
             a = vec3(penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.x, penumbraDsmA1.x, penumbraDsmA2.x),
                      penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.y, penumbraDsmA1.y, penumbraDsmA2.y),
                      penumbraDsmInterpolate(e0, e1, e2, penumbraDsmA0.z, penumbraDsmA1.z, penumbraDsmA2.z));
