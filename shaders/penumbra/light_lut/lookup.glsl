@@ -112,29 +112,31 @@ uint penumbraLutSampleCount(PenumbraLutParams p, uint table) {
 
 // The bits of table `table` that stand for real samples (lightLutValidMask).
 uvec4 penumbraLutValidMask(PenumbraLutParams p, uint table) {
-    const uint count = penumbraLutSampleCount(p, table);
-    uvec4 m = uvec4(0u);
-    for (uint w = 0u; w < 4u; ++w) {
-        const uint bits = count > 32u * w ? min(32u, count - 32u * w) : 0u;
-        m[w] = bits == 32u ? 0xFFFFFFFFu : (1u << bits) - 1u;
-    }
-    return m;
+    // Per word min(32, max(0, count - 32 w)) low bits, with constant indices (no per-lane array).
+    const ivec4 bits = clamp(ivec4(penumbraLutSampleCount(p, table)) - ivec4(0, 32, 64, 96), ivec4(0), ivec4(32));
+    const uvec4 low = (uvec4(1u) << uvec4(min(bits, ivec4(31)))) - 1u;  // shifts stay below 32
+    return mix(low, uvec4(0xFFFFFFFFu), equal(bits, ivec4(32)));
 }
 
-// lightLutLookup for a located cell: the centre mask of table `table` at the cell (complemented
-// when flipped) and, for a certified LUT, its uncertain mask (0 for a seed-mode LUT and for
-// trivial planes). The cell does not depend on the table: a caller looking one plane up in several
-// tables (a set of more than 128 samples) locates it once.
-uvec4 penumbraLutLookupCell(PenumbraLutCell cell, uint table, out uvec4 uncertain) {
+// The centre mask of table `table` at a located cell (complemented when flipped): seed mode's
+// answer. The cell does not depend on the table: a caller looking one plane up in several tables
+// (a set of more than 128 samples) locates it once.
+uvec4 penumbraLutCentreCell(PenumbraLutCell cell, uint table) {
     const PenumbraLutParams p = PENUMBRA_LUT_PARAMS;
     const uvec4 valid = penumbraLutValidMask(p, table);
-    uncertain = uvec4(0u);
     if (cell.trivial != 0) return cell.trivial > 0 ? valid : uvec4(0u);
-    const uint index = table * p.texels_per_table + cell.texel;
-    uvec4 centre = PENUMBRA_LUT_LOAD(index);
-    if ((p.flags & uint(PENUMBRA_LUT_FLAG_CERTIFIED)) != 0u) uncertain = PENUMBRA_LUT_LOAD(p.uncertain_offset + index);
-    if (cell.flip) centre = ~centre & valid;
-    return centre;
+    const uvec4 centre = PENUMBRA_LUT_LOAD(table * p.texels_per_table + cell.texel);
+    return cell.flip ? ~centre & valid : centre;
+}
+
+// lightLutLookup for a located cell: the centre mask and, for a certified LUT, the uncertain mask
+// (0 for a seed-mode LUT and for trivial planes).
+uvec4 penumbraLutLookupCell(PenumbraLutCell cell, uint table, out uvec4 uncertain) {
+    const PenumbraLutParams p = PENUMBRA_LUT_PARAMS;
+    uncertain = uvec4(0u);
+    if (cell.trivial == 0 && (p.flags & uint(PENUMBRA_LUT_FLAG_CERTIFIED)) != 0u)
+        uncertain = PENUMBRA_LUT_LOAD(p.uncertain_offset + table * p.texels_per_table + cell.texel);
+    return penumbraLutCentreCell(cell, table);
 }
 
 // lightLutLookup: penumbraLutLookupCell at the plane's cell.
@@ -144,8 +146,7 @@ uvec4 penumbraLutLookup(vec4 plane, uint table, out uvec4 uncertain) {
 
 // Seed mode (centre sampling): the samples behind the cell's centre plane.
 uvec4 penumbraLutBehind(vec4 plane, uint table) {
-    uvec4 uncertain;
-    return penumbraLutLookup(plane, table, uncertain);
+    return penumbraLutCentreCell(penumbraLutLocate(PENUMBRA_LUT_PARAMS, plane), table);
 }
 
 // Certified mode: the samples certainly behind (lutCertain: centre & ~uncertain) and the uncertain

@@ -313,35 +313,43 @@ void main() {
         for (uint block = 0u; block < tables; ++block) {
             const uint table = set * tables + block;
             if (mode == PENUMBRA_SBS_MODE_LUT) {
-                uvec4 m = uvec4(0xFFFFFFFFu);
-                for (int i = 0; i < 4; ++i) {
-                    uvec4 unused;
-                    m &= penumbraLutLookupCell(cells[i], table, unused);
-                }
-                for (uint w = 0u; w < 4u && block * 4u + w < words; ++w)
-                    if (m[w] != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m[w]);
+                const uvec4 m = penumbraLutCentreCell(cells[0], table) & penumbraLutCentreCell(cells[1], table) &
+                                penumbraLutCentreCell(cells[2], table) & penumbraLutCentreCell(cells[3], table);
+                const uint base = mask_base + block * 4u, left = words - block * 4u;
+                if (m.x != 0u) atomicOr(penumbraSbsMasks[base], m.x);
+                if (left > 1u && m.y != 0u) atomicOr(penumbraSbsMasks[base + 1u], m.y);
+                if (left > 2u && m.z != 0u) atomicOr(penumbraSbsMasks[base + 2u], m.z);
+                if (left > 3u && m.w != 0u) atomicOr(penumbraSbsMasks[base + 3u], m.w);
                 continue;
             }
             const uvec4 valid = penumbraLutValidMask(P.lut, table);
-            uvec4 certain = uvec4(0u), uncertain = uvec4(0u);
-            for (int i = 0; i < 4; ++i) {
-                uvec4 c_i = uvec4(0u), u_i = valid;
-                if (planes[i].proven) {
-                    c_i = penumbraLutLookupCell(cells[i], table, u_i) & ~u_i;  // penumbraLutBehindCertified
-                } else {
-                    ++unproven_planes;
-                }
-                if (i == 0) {
-                    certain = c_i;
-                    uncertain = u_i;
-                } else {
-                    penumbraLutCombine(certain, uncertain, c_i, u_i);
-                }
+            // The four planes, unrolled (constant indices: no per-lane arrays on SIMD drivers).
+            uvec4 u0 = valid, u1 = valid, u2 = valid, u3 = valid;
+            uvec4 c0 = uvec4(0u), c1 = uvec4(0u), c2 = uvec4(0u), c3 = uvec4(0u);
+            if (planes[0].proven) c0 = penumbraLutLookupCell(cells[0], table, u0) & ~u0;  // penumbraLutBehindCertified
+            if (planes[1].proven) c1 = penumbraLutLookupCell(cells[1], table, u1) & ~u1;
+            if (planes[2].proven) c2 = penumbraLutLookupCell(cells[2], table, u2) & ~u2;
+            if (planes[3].proven) c3 = penumbraLutLookupCell(cells[3], table, u3) & ~u3;
+            unproven_planes += (planes[0].proven ? 0u : 1u) + (planes[1].proven ? 0u : 1u) + (planes[2].proven ? 0u : 1u) +
+                               (planes[3].proven ? 0u : 1u);
+            uvec4 certain = c0, uncertain = u0;
+            penumbraLutCombine(certain, uncertain, c1, u1);
+            penumbraLutCombine(certain, uncertain, c2, u2);
+            penumbraLutCombine(certain, uncertain, c3, u3);
+            uncertain &= valid;
+            const uvec4 counts = uvec4(bitCount(uncertain));
+            uncertain_bits += (counts.x + counts.y) + (counts.z + counts.w);
+            if (uncertain == uvec4(0u)) {  // every bit certain (nearly always): no exact test
+                const uint base = mask_base + block * 4u, left = words - block * 4u;
+                if (certain.x != 0u) atomicOr(penumbraSbsMasks[base], certain.x);
+                if (left > 1u && certain.y != 0u) atomicOr(penumbraSbsMasks[base + 1u], certain.y);
+                if (left > 2u && certain.z != 0u) atomicOr(penumbraSbsMasks[base + 2u], certain.z);
+                if (left > 3u && certain.w != 0u) atomicOr(penumbraSbsMasks[base + 3u], certain.w);
+                continue;
             }
             for (uint w = 0u; w < 4u && block * 4u + w < words; ++w) {
                 uint m = certain[w];
-                uint bits = uncertain[w] & valid[w];
-                uncertain_bits += uint(bitCount(bits));
+                uint bits = uncertain[w];
                 while (bits != 0u) {
                     const uint bit = uint(findLSB(bits));
                     bits &= bits - 1u;
