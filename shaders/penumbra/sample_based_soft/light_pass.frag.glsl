@@ -124,6 +124,15 @@ bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
     return penumbraAfhBlocks(v0, v1, v2, p, l, penumbraSbsParams.epsilon.x, 0.0LF);
 }
 
+// One table's four mask words OR-ed into a view sample's mask from word `base` on (only the
+// `left` words the sample has from there), constant indices, no atomic for an empty word.
+void penumbraSbsOrTable(uint base, uint left, uvec4 m) {
+    if (m.x != 0u) atomicOr(penumbraSbsMasks[base], m.x);
+    if (left > 1u && m.y != 0u) atomicOr(penumbraSbsMasks[base + 1u], m.y);
+    if (left > 2u && m.z != 0u) atomicOr(penumbraSbsMasks[base + 2u], m.z);
+    if (left > 3u && m.w != 0u) atomicOr(penumbraSbsMasks[base + 3u], m.w);
+}
+
 void main() {
     const PenumbraSbsParams P = penumbraSbsParams;
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), P.grid.w, P.grid.z);
@@ -315,11 +324,7 @@ void main() {
             if (mode == PENUMBRA_SBS_MODE_LUT) {
                 const uvec4 m = penumbraLutCentreCell(cells[0], table) & penumbraLutCentreCell(cells[1], table) &
                                 penumbraLutCentreCell(cells[2], table) & penumbraLutCentreCell(cells[3], table);
-                const uint base = mask_base + block * 4u, left = words - block * 4u;
-                if (m.x != 0u) atomicOr(penumbraSbsMasks[base], m.x);
-                if (left > 1u && m.y != 0u) atomicOr(penumbraSbsMasks[base + 1u], m.y);
-                if (left > 2u && m.z != 0u) atomicOr(penumbraSbsMasks[base + 2u], m.z);
-                if (left > 3u && m.w != 0u) atomicOr(penumbraSbsMasks[base + 3u], m.w);
+                penumbraSbsOrTable(mask_base + block * 4u, words - block * 4u, m);
                 continue;
             }
             const uvec4 valid = penumbraLutValidMask(P.lut, table);
@@ -340,11 +345,7 @@ void main() {
             const uvec4 counts = uvec4(bitCount(uncertain));
             uncertain_bits += (counts.x + counts.y) + (counts.z + counts.w);
             if (uncertain == uvec4(0u)) {  // every bit certain (nearly always): no exact test
-                const uint base = mask_base + block * 4u, left = words - block * 4u;
-                if (certain.x != 0u) atomicOr(penumbraSbsMasks[base], certain.x);
-                if (left > 1u && certain.y != 0u) atomicOr(penumbraSbsMasks[base + 1u], certain.y);
-                if (left > 2u && certain.z != 0u) atomicOr(penumbraSbsMasks[base + 2u], certain.z);
-                if (left > 3u && certain.w != 0u) atomicOr(penumbraSbsMasks[base + 3u], certain.w);
+                penumbraSbsOrTable(mask_base + block * 4u, words - block * 4u, certain);
                 continue;
             }
             for (uint w = 0u; w < 4u && block * 4u + w < words; ++w) {
