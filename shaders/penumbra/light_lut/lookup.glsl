@@ -1,7 +1,9 @@
 // penumbra — light-sample LUT lookups (sintorn2008 §4.2, Fig. 6: the bit mask of the light samples
 // behind a plane, AND-ed over a caster's planes) and the exact test they are checked against. CPU
 // twins in include/penumbra/light_lut.hpp, operation for operation (`precise` here, opaque products
-// there): penumbraLutLocate = lightLutLocate<float>, penumbraLutLookup = lightLutLookup<float>,
+// there): penumbraLutLocate = lightLutLocate<float>, penumbraLutLookup = lightLutLookup<float>
+// (= penumbraLutLookupCell / penumbraLutCentreCell at penumbraLutLocate's cell, the split a caller
+// uses to locate a plane once for several tables),
 // penumbraExactBehind = exactBehind<float>, penumbraLutCombine = lutCombine, penumbraLutResolve =
 // lutResolve, penumbraLutValidMask = lightLutValidMask. With correctly rounded float +, *, / and
 // sqrt (llvmpipe, most desktop GPUs) the octahedral lookups equal the twins bit for bit; the

@@ -8,7 +8,8 @@
 //     oriented by det = (v0 - p) . ((v1 - p) x (v2 - p)), mapped to the light's normalised space
 //     (penumbraSbsPlaneToLocal: LightFrame::planeToLocal with the frame from the parameter block),
 //     then rounded to float for the LUT lookup (penumbra/light_lut/lookup.glsl);
-//   - Lut: the AND of the four centre masks (penumbraLutBehind), OR-ed into the sample's mask;
+//   - Lut: the AND of the four centre masks (penumbraLutCentreCell; each plane's cell located once
+//     per pair for all of the set's tables), OR-ed into the sample's mask;
 //   - Exact: certified lookups combined with penumbraLutCombine; a plane whose rounding bound
 //     exceeds the budget (params.bounds.z, a quarter of the LUT's tolerance by default: the float
 //     rounding of the plane takes another quarter) is all-uncertain; pairs within the oracle's
