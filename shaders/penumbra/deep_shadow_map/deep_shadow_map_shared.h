@@ -17,6 +17,9 @@ namespace penumbra::shared {
 #define PENUMBRA_DSM_MAX_MERGE_LISTS 1024
 #define PENUMBRA_DSM_GAUSS_TABLE 256
 #define PENUMBRA_DSM_MAX_LEVELS 13
+// Candidate start values per channel of each segment the compressor tries (DsmCompressor,
+// compress.glsl): more find longer segments (fewer vertices) at K times the compression work.
+#define PENUMBRA_DSM_CANDIDATES 4
 
 #define PENUMBRA_DSM_FILTER_BOX 0
 #define PENUMBRA_DSM_FILTER_GAUSSIAN 1

@@ -96,11 +96,12 @@ void penumbraDsmSiftDown(uint i) {
 void penumbraDsmStep(float z, float before[PENUMBRA_DSM_CHANNELS], float v[PENUMBRA_DSM_CHANNELS], bool kink) {
     bool step = false;
     for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) step = step || v[c] != before[c];
-    if (step) {
-        penumbraDsmCompressAdd(z, before);
-        penumbraDsmCompressAdd(z, v);
-    } else if (kink) {
-        penumbraDsmCompressAdd(z, v);
+    // One call site of the compressor (it is large once inlined): a step passes both sides.
+    int points = step ? 2 : (kink ? 1 : 0);
+    for (int j = 0; j < points; ++j) {
+        float p[PENUMBRA_DSM_CHANNELS];
+        for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) p[c] = step && j == 0 ? before[c] : v[c];
+        penumbraDsmCompressAdd(z, p);
     }
 }
 

@@ -132,8 +132,11 @@ void main() {
             right[c] = ar;
             step = step || ar != al;
         }
-        penumbraDsmCompressAdd(z, left);
-        if (step) penumbraDsmCompressAdd(z, right);
+        for (int j = 0; j < (step ? 2 : 1); ++j) {  // one call site of the (large) compressor
+            float p[PENUMBRA_DSM_CHANNELS];
+            for (int c = 0; c < PENUMBRA_DSM_CHANNELS; ++c) p[c] = j == 0 ? left[c] : right[c];
+            penumbraDsmCompressAdd(z, p);
+        }
     }
     penumbraDsmCompressFinish();
 #if PENUMBRA_DSM_PASS == 0
