@@ -22,8 +22,9 @@
 //       (buildDsmMapCpu, levels = 1). The fragments (rasterization) and the uncompressed map are
 //       built once per (scene, S) and cached (tableData, one (scene, S) at a time). Counters:
 //       vertices_before (uncompressed level-0 vertices), vertices_after, bytes_level0
-//       (4 (R^2 + 1) offset bytes + 8 bytes per vertex), depth_map_bytes (R^2 S 4: a plain depth
-//       map holding the same S samples per texel), ratio = depth_map_bytes / bytes_level0,
+//       (DsmMapCpu::levelBytes: 4 (R^2 + 1) offset bytes + 6 bytes per grey vertex),
+//       depth_map_bytes (R^2 S 4: a plain depth map holding the same S samples per texel),
+//       ratio = depth_map_bytes / bytes_level0,
 //       err_linf (max over every texel of dsmFunctionDistance(uncompressed, compressed), double;
 //       must be <= eps), err_linf_over_eps, eps, fragments, resolution. A texel over eps is also
 //       printed to stderr (texel, eps, distance, vertex counts).
@@ -406,9 +407,10 @@ void mergeCompressEntry(benchmark::State& state, uint32_t R, uint32_t S) {
 }
 
 /// Levels 1 .. setup.levels - 1 of `map` from its level 0 (one channel): the CPU twin's own loop for
-/// level > 0 (buildDsmMapCpu: detail::dsmAverageTexel into a detail::DsmCompressor at the level's
-/// tolerance minus 1/64), replayed on a prebuilt level 0 so that the mip chain can be timed alone,
-/// as the GPU's mip pass is a separate kernel. mipsEntry checks it bit for bit against buildDsmMapCpu.
+/// level > 0 (buildDsmMapCpu: detail::dsmAverageTexel into a detail::DsmCompressor at
+/// dsmInnerTolerance of the level's tolerance), replayed on a prebuilt level 0 so that the mip
+/// chain can be timed alone, as the GPU's mip pass is a separate kernel. mipsEntry checks it bit
+/// for bit against buildDsmMapCpu.
 void buildMipsCpu(const penumbra::DsmSetup& setup, penumbra::DsmMapCpu& map) {
     namespace detail = penumbra::detail;
     constexpr int F = 2;  // (z, V)
@@ -419,7 +421,7 @@ void buildMipsCpu(const penumbra::DsmSetup& setup, penumbra::DsmMapCpu& map) {
     for (uint32_t level = 1; level < setup.levels; ++level) {
         const uint32_t r = setup.level_resolution[level], rc = setup.level_resolution[level - 1];
         const float tol = setup.levelTolerance(level);
-        const float eps_inner = tol - tol * (1.0f / 64.0f);
+        const float eps_inner = penumbra::dsmInnerTolerance(tol);  // as buildDsmMapCpu (minus 1/64 and the 16-bit rounding)
         std::vector<uint32_t>& offsets = map.offsets[level];
         std::vector<float>& out = map.vertices[level];
         offsets.assign(static_cast<size_t>(r) * r + 1, 0);

@@ -187,6 +187,21 @@ TEST_CASE("GPU deep shadow map == CPU twin: hairball, grey opacity, box filter, 
     compareRun(setup, lightFor(c), op, c);
 }
 
+TEST_CASE("GPU deep shadow map == CPU twin: the built-in hairball at 128^2, S = 64, one mip level") {
+    // Long, diverging compressor runs per SIMD batch of texels: `continue` in both of the compressor's
+    // candidate loops once made texels differ here on llvmpipe (Mesa 22.3); no smaller case caught it.
+    penumbra::test::context();
+    const Casters c = objects(penumbra::scene::builtin("hairball"));
+    DsmOptions o;
+    o.resolution = 128;
+    o.samples = 64;
+    o.levels = 2;
+    const auto setup = penumbra::deepShadowMapSetup(o);
+    DsmOpacity op;
+    op.mesh = glm::vec3(0.5f);
+    compareRun(setup, lightFor(c), op, c);
+}
+
 TEST_CASE("GPU deep shadow map == CPU twin: grass, colour per triangle, Gaussian radius 1, S = 9") {
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::grass(150, 2, false));

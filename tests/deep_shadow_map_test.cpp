@@ -994,6 +994,100 @@ TEST_CASE("deep shadow map: compressor on random step functions") {
     MESSAGE("random functions: " << in_vertices << " vertices compressed to " << out_vertices);
 }
 
+/// lokovic2000's greedy as the paper states it, written here in double as the comparison for the
+/// library's free origins: the origin is fixed where the previous window's middle slope ends, a drop
+/// no slope can follow is a vertical step. Grey; the vertex count padded to even like the library's.
+uint32_t fixedOriginVertexCount(const Input& in, double eps) {
+    uint32_t count = 0;
+    bool open = false;
+    double zo = 0.0, vo = 0.0, lo = 0.0, hi = 0.0, zl = 0.0;
+    for (uint32_t i = 0; i < in.count(); ++i) {
+        const double z = in.v[2 * i], v = in.v[2 * i + 1];
+        if (!open) {
+            zo = zl = z, vo = v, lo = -kInf, hi = 0.0, open = true, ++count;
+            continue;
+        }
+        for (int attempt = 0; attempt < 2; ++attempt) {
+            if (z == zo) {
+                if (std::fabs(vo - v) > eps) vo = std::min(vo, v), ++count;
+                break;
+            }
+            const double nlo = std::max(lo, (std::max(v - eps, 0.0) - vo) / (z - zo));
+            const double nhi = std::min(hi, (v + eps - vo) / (z - zo));
+            if (nlo <= nhi) {
+                lo = nlo, hi = nhi, zl = z;
+                break;
+            }
+            if (zl == zo) {
+                vo = std::min(vo, v), zo = zl = z, lo = -kInf, hi = 0.0, ++count;
+                break;
+            }
+            vo = std::max(0.0, vo + 0.5 * (lo + hi) * (zl - zo)), zo = zl, lo = -kInf, hi = 0.0, ++count;
+        }
+    }
+    if (open && zl != zo) ++count;
+    return count + (count & 1u);
+}
+
+/// Light through hair: a few crossings, each a drop spread over a small depth range in many
+/// sub-sample steps, flat between them.
+Input hairLikeFunction(Rng& rng) {
+    Input in(1);
+    double z = 2.0, v = 1.0;
+    const uint32_t crossings = 2 + rng.below(20);
+    for (uint32_t i = 0; i < crossings; ++i) {
+        z += rng.uniform(0.01, 0.2);
+        const double drop = v * rng.uniform(0.0, 0.5), extent = rng.uniform(0.0, 0.01);
+        const uint32_t hits = 1 + rng.below(40);
+        for (uint32_t h = 1; h <= hits; ++h) {
+            const double at = z + extent * h / hits, before = v;
+            v -= drop / hits;
+            in.addGrey(at, before);
+            in.addGrey(at, v);
+        }
+        z += extent;
+    }
+    return in;
+}
+
+TEST_CASE("deep shadow map: free segment origins need fewer vertices than lokovic2000's fixed ones") {
+    // Same bound (checkCompressor: within eps, monotone, input depths) with fewer vertices: the
+    // library's 4 candidate origins against the fixed middle-slope origin, in aggregate. Per
+    // function the greedy choices may differ either way.
+    Rng rng(penumbra::test::testSeed(13));
+    for (const float eps : {1.0f / 64.0f, 1.0f / 256.0f}) {
+        CAPTURE(eps);
+        uint64_t free_origins = 0, fixed = 0, input = 0;
+        for (int i = 0; i < 300; ++i) {
+            const Input in = hairLikeFunction(rng);
+            input += in.count();
+            free_origins += checkCompressor(eps, in, "hair-like function " + std::to_string(i));
+            fixed += fixedOriginVertexCount(in, penumbra::dsmInnerTolerance(eps));
+        }
+        MESSAGE("hair-like functions at eps " << eps << ": " << input << " vertices, fixed origins " << fixed
+                                              << ", free origins " << free_origins);
+        CHECK(free_origins <= 0.95 * static_cast<double>(fixed));
+    }
+    // Vertical steps keep their exact values (the step's own candidate): a layer letting 1/4 through,
+    // then an opaque one. (The plateau's end, at depth 3, is only within eps of 1/4.)
+    Input layers(1);
+    layers.addGrey(1.0, 1.0);
+    layers.addGrey(1.0, 0.25);
+    layers.addGrey(3.0, 0.25);
+    layers.addGrey(3.0, 0.0);
+    layers.addGrey(4.0, 0.0);
+    std::vector<float> out;
+    CHECK(checkCompressor(1.0f / 64.0f, layers, "two layers", &out) == 6);  // 5, padded
+    REQUIRE(out.size() == 12);
+    CHECK(out[0] == 1.0f);  // (z, V) pairs
+    CHECK(out[1] == 1.0f);
+    CHECK(out[2] == 1.0f);
+    CHECK(out[3] == 0.25f);
+    CHECK(out[6] == 3.0f);
+    CHECK(out[7] == 0.0f);
+    CHECK(out[9] == 0.0f);
+}
+
 TEST_CASE("deep shadow map: merge of one quad over the whole image, exact values and left continuity") {
     const DsmSetup setup = makeSetup(8, 16);
     const DsmLight light = orthoLight();

@@ -59,7 +59,7 @@
 // Unlike lokovic2000, whose origin is the previous window's middle slope at that depth, a segment's
 // origin stays free within what the previous window allows there: PENUMBRA_DSM_CANDIDATES (4)
 // origins are tried at once, each with its own window, and the one open longest (widest window)
-// fixes the previous segment's end when this one closes (DsmCompressor). Same bound, about 9 %
+// fixes the previous segment's end when this one closes (DsmCompressor). Same bound, 9-13 %
 // fewer vertices on hairball and grass (docs/design.md). The windows use
 // the tolerance minus 1/64 of it, which covers float rounding (tolerance >= 2^-12), and never reach
 // below 0 (a window [max(V - eps, 0), V + eps]: clamping a segment's end afterwards would move its
@@ -587,14 +587,16 @@ namespace detail {
 /// its own slope window. The segment lasts while, in every channel, some candidate's window is
 /// open; when it closes, each channel keeps the candidate whose window is widest (ties: the lowest),
 /// which fixes the predecessor's end, and the next W is that candidate's window at the last
-/// accepted depth. The first vertex is the input's first (W a point). Same guarantees as before:
-/// every segment's slope lies in a window its inputs allow, so the output is within eps_inner (plus
-/// rounding) of the input and non-increasing; on hairball about 11 % fewer vertices than a fixed
-/// origin at the same tolerance (docs/design.md).
+/// accepted depth. A vertical step (and the first vertex) puts candidate 0 at the drop's exact
+/// value and keeps it while its window is open, the others spread over [V - eps, V + eps] below the
+/// previous value. Every segment's slope lies in a window its inputs allow, so the output is within
+/// eps_inner (plus rounding) of the input and non-increasing; 9-13 % fewer vertices than the fixed
+/// origin on hairball and grass (docs/design.md).
 template <int C>
 class DsmCompressor {
 public:
     static constexpr int K = PENUMBRA_DSM_CANDIDATES;
+    static_assert(K >= 2 && (K & (K - 1)) == 0, "PENUMBRA_DSM_CANDIDATES: a power of two >= 2");
 
     /// eps_inner: dsmInnerTolerance of the tolerance (DsmParams::numbers.w). Output values are the
     /// stored ones (16-bit, decoded); a texel's vertex count is padded to even with a copy of its
@@ -679,7 +681,8 @@ public:
 private:
     /// A segment starting at depth z with values in [wlo, whi] per channel: K candidates at
     /// (k + 1/2) / K of the interval or, with `exact` (a vertical step, the first vertex), candidate 0
-    /// at that value (preferred while its window stays open) and the others at (k - 1/2) / (K - 1).
+    /// at that value (preferred while its window stays open) and the others at k / K (K is a power
+    /// of two: the fractions are exact, no division whose rounding a driver might change).
     void start(float z, const float* wlo, const float* whi, const float* exact = nullptr) {
         zs_ = z;
         z_last_ = z;
@@ -687,8 +690,7 @@ private:
         for (int c = 0; c < C; ++c) {
             const float span = whi[c] - wlo[c];
             for (int k = 0; k < K; ++k) {
-                const float f = exact ? (static_cast<float>(k) - 0.5f) / static_cast<float>(K - 1)
-                                      : (static_cast<float>(k) + 0.5f) * (1.0f / static_cast<float>(K));
+                const float f = (static_cast<float>(k) + (exact ? 0.0f : 0.5f)) * (1.0f / static_cast<float>(K));
                 cand_[k][c] = exact && k == 0 ? exact[c] : std::min(wlo[c] + mulRounded(span, f), whi[c]);
                 lo_[k][c] = -std::numeric_limits<float>::infinity();
                 hi_[k][c] = 0.0f;

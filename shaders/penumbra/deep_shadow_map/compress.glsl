@@ -2,7 +2,8 @@
 // start: the twin of penumbra::detail::DsmCompressor<C> (include/penumbra/deep_shadow_map.hpp),
 // operation for operation. Each segment tries PENUMBRA_DSM_CANDIDATES start values per channel,
 // each with its own slope window; the header explains the rule.
-// One compressor per invocation (globals with the penumbraDsmC prefix).
+// One compressor per invocation (globals with the penumbraDsmC prefix). The candidate loops have no
+// `continue`: with one, llvmpipe (Mesa 22.3) gave some lanes of a diverged batch other results.
 //   hook:  PENUMBRA_DSM_COMPRESS_EMIT(index, z, v) — store output vertex `index` (float z, float v[C]).
 //   needs: PENUMBRA_DSM_CHANNELS (1 or 3), PENUMBRA_DSM_CANDIDATES (deep_shadow_map_shared.h).
 #ifndef PENUMBRA_DSM_COMPRESS_GLSL
@@ -47,7 +48,8 @@ void penumbraDsmCEmit() {
 }
 
 // A segment starting at depth z with values in [wlo, whi] per channel; with_exact: candidate 0 is
-// exact[c] (a vertical step, the first vertex), the others at (k - 1/2) / (K - 1) of the interval.
+// exact[c] (a vertical step, the first vertex), the others at k / K of the interval (K a power of
+// two: exact fractions).
 void penumbraDsmCStart(float z, float wlo[PENUMBRA_DSM_C], float whi[PENUMBRA_DSM_C], bool with_exact,
                        float exact[PENUMBRA_DSM_C]) {
     penumbraDsmCZs = z;
@@ -56,8 +58,7 @@ void penumbraDsmCStart(float z, float wlo[PENUMBRA_DSM_C], float whi[PENUMBRA_DS
     for (int c = 0; c < PENUMBRA_DSM_C; ++c) {
         precise float span = whi[c] - wlo[c];
         for (int k = 0; k < PENUMBRA_DSM_K; ++k) {
-            precise float f = with_exact ? (float(k) - 0.5) / float(PENUMBRA_DSM_K - 1)
-                                         : (float(k) + 0.5) * (1.0 / float(PENUMBRA_DSM_K));
+            precise float f = (float(k) + (with_exact ? 0.0 : 0.5)) * (1.0 / float(PENUMBRA_DSM_K));
             precise float at = wlo[c] + span * f;
             int i = k * PENUMBRA_DSM_C + c;
             penumbraDsmCCand[i] = with_exact && k == 0 ? exact[c] : min(at, whi[c]);
@@ -78,9 +79,9 @@ void penumbraDsmCEmitStart() {
         float width = 0.0, value = 0.0, lo = 0.0, hi = 0.0;
         for (int k = 0; k < PENUMBRA_DSM_K; ++k) {
             int i = k * PENUMBRA_DSM_C + c;
-            if (!penumbraDsmCAlive[i] || (penumbraDsmCExact && b == 0)) continue;
             precise float w = penumbraDsmCHi[i] - penumbraDsmCLo[i];
-            if (b < 0 || w > width) {
+            bool eligible = penumbraDsmCAlive[i] && !(penumbraDsmCExact && b == 0);
+            if (eligible && (b < 0 || w > width)) {
                 b = k;
                 width = w;
                 value = penumbraDsmCCand[i];
@@ -127,8 +128,9 @@ void penumbraDsmCompressAdd(float z, float v[PENUMBRA_DSM_C]) {
                 nlo[i] = penumbraDsmCLo[i];
                 nhi[i] = penumbraDsmCHi[i];
                 nalive[i] = false;
-                if (!penumbraDsmCAlive[i]) continue;
-                if (same) {
+                if (!penumbraDsmCAlive[i]) {
+                    // a closed window stays closed
+                } else if (same) {
                     nalive[i] = abs(penumbraDsmCCand[i] - v[c]) <= penumbraDsmCEps;
                 } else {
                     precise float lo_num = max(v[c] - penumbraDsmCEps, 0.0) - penumbraDsmCCand[i];

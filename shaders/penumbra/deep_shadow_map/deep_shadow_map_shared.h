@@ -18,7 +18,8 @@ namespace penumbra::shared {
 #define PENUMBRA_DSM_GAUSS_TABLE 256
 #define PENUMBRA_DSM_MAX_LEVELS 13
 // Candidate start values per channel of each segment the compressor tries (DsmCompressor,
-// compress.glsl): more find longer segments (fewer vertices) at K times the compression work.
+// compress.glsl), a power of two: more find longer segments (fewer vertices) at K times the
+// compression work.
 #define PENUMBRA_DSM_CANDIDATES 4
 
 #define PENUMBRA_DSM_FILTER_BOX 0
