@@ -59,7 +59,7 @@
 // Unlike lokovic2000, whose origin is the previous window's middle slope at that depth, a segment's
 // origin stays free within what the previous window allows there: PENUMBRA_DSM_CANDIDATES (4)
 // origins are tried at once, each with its own window, and the one open longest (widest window)
-// fixes the previous segment's end when this one closes (DsmCompressor). Same bound, 9-13 %
+// fixes the previous segment's end when this one closes (DsmCompressor). Same bound, 8-12 %
 // fewer vertices on hairball and grass (docs/design.md). The windows use
 // the tolerance minus 1/64 of it, which covers float rounding (tolerance >= 2^-12), and never reach
 // below 0 (a window [max(V - eps, 0), V + eps]: clamping a segment's end afterwards would move its
@@ -590,7 +590,7 @@ namespace detail {
 /// accepted depth. A vertical step (and the first vertex) puts candidate 0 at the drop's exact
 /// value and keeps it while its window is open, the others spread over [V - eps, V + eps] below the
 /// previous value. Every segment's slope lies in a window its inputs allow, so the output is within
-/// eps_inner (plus rounding) of the input and non-increasing; 9-13 % fewer vertices than the fixed
+/// eps_inner (plus rounding) of the input and non-increasing; 8-12 % fewer vertices than the fixed
 /// origin on hairball and grass (docs/design.md).
 template <int C>
 class DsmCompressor {
