@@ -67,6 +67,18 @@ DsmLight lightFor(const Casters& c) {
     return light;
 }
 
+/// deepShadowMapSetup of an R x R map of S sub-samples per texel with `levels` levels (0: the whole
+/// chain), `channels` and `tolerance` (0: the default 1 / (2 S)); the other options at defaults.
+penumbra::DsmSetup setupOf(uint32_t R, uint32_t S, uint32_t levels, uint32_t channels = 1, float tolerance = 0.0f) {
+    DsmOptions o;
+    o.resolution = R;
+    o.samples = S;
+    o.levels = levels;
+    o.channels = channels;
+    o.tolerance = tolerance;
+    return penumbra::deepShadowMapSetup(o);
+}
+
 /// The GPU side of an opacity hook: the builder's shader library (the default hook or a replaced
 /// one) and the texture the default hook reads (0: none).
 struct HookGpu {
@@ -177,11 +189,7 @@ void compareRun(const penumbra::DsmSetup& setup, const DsmLight& light, const Ds
 TEST_CASE("GPU deep shadow map == CPU twin: hairball, grey opacity, box filter, full mip chain") {
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::hairball(1500, 3, false));
-    DsmOptions o;
-    o.resolution = 32;
-    o.samples = 16;
-    o.levels = 0;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(32, 16, 0);
     DsmOpacity op;
     op.mesh = glm::vec3(0.5f);
     compareRun(setup, lightFor(c), op, c);
@@ -192,11 +200,7 @@ TEST_CASE("GPU deep shadow map == CPU twin: the built-in hairball at 128^2, S = 
     // candidate loops once made texels differ here on llvmpipe (Mesa 22.3); no smaller case caught it.
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::builtin("hairball"));
-    DsmOptions o;
-    o.resolution = 128;
-    o.samples = 64;
-    o.levels = 2;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(128, 64, 2);
     DsmOpacity op;
     op.mesh = glm::vec3(0.5f);
     compareRun(setup, lightFor(c), op, c);
@@ -244,11 +248,7 @@ TEST_CASE("GPU deep shadow map == CPU twin: hairball inside a participating medi
     const Casters c = objects(penumbra::scene::hairball(1200, 6, false));
     penumbra::scene::Bounds b;
     for (const auto& p : c.positions) b.extend(p);
-    DsmOptions o;
-    o.resolution = 32;
-    o.samples = 4;
-    o.levels = 0;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(32, 4, 0);
     DsmOpacity op;
     op.mesh = glm::vec3(0.3f);
     penumbra::DsmMedium medium;
@@ -273,13 +273,7 @@ std::vector<glm::vec3> hookCoordinates(const Casters& c, float repeats) {
 TEST_CASE("GPU deep shadow map == CPU twin: opacity from the default hook (RGB32F texture, repeat, clamping), colour") {
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::hairball(1200, 4, false));
-    DsmOptions o;
-    o.resolution = 64;
-    o.samples = 9;
-    o.channels = 3;
-    o.levels = 0;
-    o.tolerance = 1.0f / 32.0f;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(64, 9, 0, 3, 1.0f / 32.0f);
     // 8 x 4 random texels; a few outside [0, 1] and one NaN exercise the clamp (NaN -> 0).
     penumbra::DsmOpacityTexture texture;
     texture.width = 8;
@@ -304,13 +298,7 @@ TEST_CASE("GPU deep shadow map == CPU twin: opacity from the default hook (RGB32
 TEST_CASE("GPU deep shadow map == CPU twin: a replaced opacity hook (the engine's own opacity_hook.glsl)") {
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::grass(600, 3, false));
-    DsmOptions o;
-    o.resolution = 64;
-    o.samples = 4;
-    o.channels = 3;
-    o.levels = 2;
-    o.tolerance = 1.0f / 16.0f;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(64, 4, 2, 3, 1.0f / 16.0f);
     // A procedural material: by triangle (values -0.25 .. 1.25: clamped) and a stripe of the
     // interpolated attribute. Every operation is exact or a single rounding in both languages.
     penumbra::ShaderLibrary library = penumbra::ShaderLibrary::embedded();
@@ -334,11 +322,7 @@ vec3 penumbraDsmOpacityHook(uint triangle, vec3 coordinates) {
 TEST_CASE("GPU deep shadow map lookups == dsmLookup (bilinear, trilinear, border)") {
     penumbra::test::context();
     const Casters c = objects(penumbra::scene::hairball(1000, 9, false));
-    DsmOptions o;
-    o.resolution = 16;
-    o.samples = 16;
-    o.levels = 0;
-    const auto setup = penumbra::deepShadowMapSetup(o);
+    const auto setup = setupOf(16, 16, 0);
     const DsmLight light = lightFor(c);
     DsmOpacity op;
     op.mesh = glm::vec3(0.6f);
