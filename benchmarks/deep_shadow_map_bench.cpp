@@ -17,8 +17,12 @@
 // Entries (times in ms; every entry is single-threaded and uses Google Benchmark's default CPU
 // timer: on a shared machine the Time column (wall) can exceed CPU, and items_per_second is per
 // CPU second; counters per entry):
-//   BM_DsmCompressionTable/<scene>/<S>/<eps_div>   R = tableResolution() (128), S in {16, 64, 256},
-//       eps = 1 / (eps_div S), eps_div in {1, 2, 4}. Time: merge + compression of level 0
+//   BM_DsmCompressionTable/<scene>/<S>/<eps_div>   R = tableResolution() (128; the environment
+//       variable PENUMBRA_DSM_TABLE_RES sets another), S in {16, 64, 256},
+//       eps = 1 / (eps_div S), eps_div in {1, 2, 4}; and BM_DsmCompressionTable/<scene>/<S>/paper,
+//       eps = 1 / (4 sqrt S): lokovic2000's own setting (Fig. 7 compressed with half the expected
+//       error 1 / (2 sqrt S) of S samples; 1/64 at S = 256, 4x the loosest eps, for
+//       comparison with the seed's memory figures). Time: merge + compression of level 0
 //       (buildDsmMapCpu, levels = 1). The fragments (rasterization) and the uncompressed map are
 //       built once per (scene, S) and cached (tableData, one (scene, S) at a time). Counters:
 //       vertices_before (uncompressed level-0 vertices), vertices_after, bytes_level0
@@ -81,6 +85,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <memory>
@@ -94,7 +99,16 @@ constexpr float kOpacity = 0.5f;
 constexpr uint64_t kReceiverSeed = 20000701u;  // lokovic2000 appeared at SIGGRAPH 2000, July
 
 bool smoke() { return penumbra::bench::smokeRun(); }
-uint32_t tableResolution() { return smoke() ? 32u : 128u; }
+/// The table's map resolution: 128 (smoke: 32), or PENUMBRA_DSM_TABLE_RES (an integer in [1, 4096])
+/// to see how the ratio changes with R; 0 when that variable holds anything else (the entries
+/// then stop with an error naming it).
+uint32_t tableResolution() {
+    const char* env = std::getenv("PENUMBRA_DSM_TABLE_RES");
+    if (!env || !*env) return smoke() ? 32u : 128u;
+    char* end = nullptr;
+    const long r = std::strtol(env, &end, 10);
+    return (*end == '\0' && r >= 1 && r <= 4096) ? static_cast<uint32_t>(r) : 0u;
+}
 size_t timedReceivers() { return smoke() ? 512u : 65536u; }
 size_t oracleReceivers() { return smoke() ? 64u : 2000u; }
 
@@ -333,9 +347,16 @@ const TableData& tableData(const std::string& scene, uint32_t R, uint32_t S) {
     return data;
 }
 
-void compressionTable(benchmark::State& state, const std::string& scene, uint32_t S, uint32_t eps_div) {
+/// `tag`: the entry's last name component (eps_div or "paper"), for the message below.
+void compressionTable(benchmark::State& state, const std::string& scene, uint32_t S, float tolerance, const std::string& tag) {
     const uint32_t R = tableResolution();
-    const penumbra::DsmSetup setup = dsmBenchSetup(R, S, 1.0f / static_cast<float>(eps_div * S));
+    if (R == 0) {
+        const std::string message =
+            std::string("PENUMBRA_DSM_TABLE_RES must be an integer in [1, 4096], got '") + std::getenv("PENUMBRA_DSM_TABLE_RES") + "'";
+        state.SkipWithError(message.c_str());
+        return;
+    }
+    const penumbra::DsmSetup setup = dsmBenchSetup(R, S, tolerance);
     const TableData& data = tableData(scene, R, S);
     const penumbra::DsmFragmentsCpu& frags = *data.fragments;
     const penumbra::DsmMapCpu& raw = *data.uncompressed;
@@ -357,9 +378,9 @@ void compressionTable(benchmark::State& state, const std::string& scene, uint32_
     const double eps = setup.tolerance;
     if (worst > eps)
         std::fprintf(stderr,
-                     "BM_DsmCompressionTable/%s/%u/%u: texel (%u, %u) of R = %u: L-inf distance %.9g > eps %.9g "
+                     "BM_DsmCompressionTable/%s/%u/%s: texel (%u, %u) of R = %u: L-inf distance %.9g > eps %.9g "
                      "(uncompressed %u vertices, compressed %u)\n",
-                     scene.c_str(), S, eps_div, worst_texel % R, worst_texel / R, R, worst, eps,
+                     scene.c_str(), S, tag.c_str(), worst_texel % R, worst_texel / R, R, worst, eps,
                      raw.offsets[0][worst_texel + 1] - raw.offsets[0][worst_texel],
                      map.offsets[0][worst_texel + 1] - map.offsets[0][worst_texel]);
     const double bytes = static_cast<double>(levelBytes(map, 0));
@@ -746,13 +767,18 @@ const bool kDsmRegistered = [] {
     const Args table_samples = smoke() ? Args{4} : Args{16, 64, 256};
     const Args eps_divs = smoke() ? Args{2} : Args{1, 2, 4};
     for (const std::string& scene : scenes)
-        for (uint32_t S : table_samples)
-            for (uint32_t div : eps_divs) {
-                const std::string name =
-                    "BM_DsmCompressionTable/" + scene + "/" + std::to_string(S) + "/" + std::to_string(div);
-                configure(benchmark::RegisterBenchmark(
-                    name.c_str(), [scene, S, div](benchmark::State& st) { compressionTable(st, scene, S, div); }));
+        for (uint32_t S : table_samples) {
+            // Every tolerance of one (scene, S) in a row: they share tableData's cached fragments.
+            std::vector<std::pair<std::string, float>> tolerances;
+            for (uint32_t div : eps_divs) tolerances.emplace_back(std::to_string(div), 1.0f / static_cast<float>(div * S));
+            if (!smoke()) tolerances.emplace_back("paper", 0.25f / std::sqrt(static_cast<float>(S)));
+            for (const auto& [tag, eps] : tolerances) {
+                const std::string name = "BM_DsmCompressionTable/" + scene + "/" + std::to_string(S) + "/" + tag;
+                configure(benchmark::RegisterBenchmark(name.c_str(), [scene, S, eps = eps, tag = tag](benchmark::State& st) {
+                    compressionTable(st, scene, S, eps, tag);
+                }));
             }
+        }
     const Args resolutions = smoke() ? Args{32} : Args{64, 128, 256};
     const Args samples = smoke() ? Args{4} : Args{16, 64};
     auto each = [&](const char* base, void (*entry)(benchmark::State&, uint32_t, uint32_t), const Args& rs) {
