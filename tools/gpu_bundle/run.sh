@@ -231,6 +231,8 @@ for i in "${!blocks[@]}"; do
   errors=$(grep -c '"error_occurred": true' "$out/bench/$block.json")
   detail="$entries entries"
   [ "$errors" -gt 0 ] && detail="$detail, $errors with errors" && [ "$rc" = 0 ] && rc=1
+  # A filter that matches nothing measured nothing: a failure, not a pass (bench_blocks.txt is wrong).
+  [ "$entries" = 0 ] && [ "$rc" = 0 ] && rc=1 && detail="no entry matched the filter ${filters[$i]}"
   if [ "$rc" = 124 ] || [ "$rc" = 137 ]; then
     detail="killed after ${limit}s; $detail"
     close_bench_json "$out/bench/$block.json"
