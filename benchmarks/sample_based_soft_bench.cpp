@@ -73,10 +73,13 @@
 //                                    err_visibility_rmse_n1024, err_visibility_rmse_n1024_ours);
 //                                    pcss_rmse_over_ours (n1024 figures) and pcss_time_over_ours =
 //                                    ms / ms_ours: its error relative to ours, and at what time.
-// Sizes: W x H = 128 x 96, G = 512, maps 1024^2, 3 iterations (llvmpipe: one exact run at N = 1024
+// Sizes: W x H = 128 x 96, G = 256, maps 1024^2, 3 iterations (llvmpipe: one exact run at N = 1024
 // takes ~10 s). Smoke runs (PENUMBRA_BENCH_SMOKE=1):
 // 32 x 24, G = 32, tessellation 8, R = 32, maps 128^2, N = 128 only (1024 in the scaling entry),
-// two radii and two tessellations, 1 iteration.
+// two radii and two tessellations, 1 iteration. PENUMBRA_SOFT_BENCH_VIEW=WxH[xG] sets the view and
+// the grid of a full run (sintorn2008 §5 measured at 512^2: 512x512x1024 on a real GPU; the
+// oracle's cost grows with W H N, on every core); a malformed value stops every entry with a
+// message naming it.
 // llvmpipe runs every stage on the CPU cores: ratios, not times, are what carries over to GPUs.
 // Example: PENUMBRA_GL=egl penumbra_bench_soft --benchmark_format=json > soft.json
 //          /usr/bin/python3 tools/plot_bench.py soft.json -o soft_plots/
@@ -98,6 +101,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <map>
@@ -123,9 +127,58 @@ struct Sizes {
     int64_t iterations;
 };
 
-const Sizes& sizes() {
-    static const Sizes s = penumbra::bench::smokeRun() ? Sizes{32, 24, 32, 32, 128, 8, 1} : Sizes{128, 96, 256, 64, 1024, 64, 3};
+/// PENUMBRA_SOFT_BENCH_VIEW=WxH or WxHxG replaces the view's W x H (and the light grid's G) of a
+/// full run, e.g. 512x512x1024 for sintorn2008 §5's 512^2 viewport on a real GPU; W, H in
+/// [8, 4096], G in [16, 4096] (G stays 256 when not given). Anything else leaves the defaults and
+/// every entry stops with sizesError()'s message, which names the variable and its value.
+std::string& sizesErrorSlot() {
+    static std::string error;
+    return error;
+}
+const std::string& sizesError() { return sizesErrorSlot(); }
+
+Sizes makeSizes() {
+    if (penumbra::bench::smokeRun()) return Sizes{32, 24, 32, 32, 128, 8, 1};
+    Sizes s{128, 96, 256, 64, 1024, 64, 3};
+    const char* env = std::getenv("PENUMBRA_SOFT_BENCH_VIEW");
+    if (!env || !*env) return s;
+    unsigned long values[3] = {0, 0, s.grid};
+    const char* at = env;
+    int parsed = 0;
+    for (; parsed < 3; ++parsed) {
+        if (*at < '0' || *at > '9') break;
+        char* end = nullptr;
+        values[parsed] = std::strtoul(at, &end, 10);
+        at = end;
+        if (*at != 'x') {
+            ++parsed;
+            break;
+        }
+        ++at;
+    }
+    const bool ok = *at == '\0' && parsed >= 2 && values[0] >= 8 && values[0] <= 4096 && values[1] >= 8 &&
+                    values[1] <= 4096 && values[2] >= 16 && values[2] <= 4096;
+    if (!ok) {
+        sizesErrorSlot() = std::string("PENUMBRA_SOFT_BENCH_VIEW must be WxH or WxHxG (W, H in [8, 4096], G in [16, 4096]), got '") +
+                           env + "'";
+        return s;
+    }
+    s.width = uint32_t(values[0]);
+    s.height = uint32_t(values[1]);
+    s.grid = uint32_t(values[2]);
     return s;
+}
+
+const Sizes& sizes() {
+    static const Sizes s = makeSizes();
+    return s;
+}
+
+/// Stops the entry when PENUMBRA_SOFT_BENCH_VIEW could not be read (sizesError()).
+bool sizesRejected(benchmark::State& state) {
+    if (sizesError().empty()) return false;
+    state.SkipWithError(sizesError().c_str());
+    return true;
 }
 
 std::vector<uint32_t> sampleCounts() {
@@ -416,6 +469,7 @@ void leaveNoBindings() {
 
 /// BM_SoftShadows, BM_SoftShadowsRadius, BM_SoftShadowsTriangles: one pipeline run per iteration.
 void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_percent, uint32_t n, SoftMode mode) {
+    if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const View& v = view(tessellation);
@@ -442,6 +496,7 @@ void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_p
 
 /// N = 128 against N = 1024 in one entry (sintorn2008 Fig. 13: the cost "roughly only doubles").
 void BM_SoftShadowsNScaling(benchmark::State& state) {
+    if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const uint32_t tessellation = sizes().tessellation;
@@ -478,6 +533,7 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
 
 /// sintorn2008 §5's alternative: one shadow map per light sample, averaged; ours timed with it.
 void BM_ShadowMapsAveraged(benchmark::State& state) {
+    if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const uint32_t tessellation = sizes().tessellation;
@@ -512,6 +568,7 @@ void BM_ShadowMapsAveraged(benchmark::State& state) {
 
 /// PCSS from one map at the light's centre; ours timed with it.
 void BM_Pcss(benchmark::State& state) {
+    if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const uint32_t tessellation = sizes().tessellation;
