@@ -35,6 +35,7 @@ using penumbra::test::GlAudit;
 struct Recorded {
     std::string report;
     size_t calls = 0, queries = 0, error_checks = 0, read_backs = 0, maps = 0, sync_waits = 0, allocations = 0;
+    size_t driver_allocations = 0;  // inside GL calls: the driver's (support/driver_call.hpp)
     Status status = Status::Ok;
 };
 
@@ -58,6 +59,7 @@ Recorded record(const std::function<Status()>& f) {
     r.maps = audit.maps();
     r.sync_waits = audit.syncWaits();
     r.allocations = heap.allocations();
+    r.driver_allocations = heap.driverAllocations();
     return r;
 }
 
@@ -72,7 +74,8 @@ void checkContract(const Recorded& r, const std::string& what) {
     CHECK(r.maps == 0);
     CHECK(r.sync_waits == 0);
     CHECK(r.allocations == 0);
-    MESSAGE(what, ": ", r.calls, " GL calls, 0 queries, 0 glGetError, 0 read-backs/maps/waits, 0 allocations");
+    MESSAGE(what, ": ", r.calls, " GL calls, 0 queries, 0 glGetError, 0 read-backs/maps/waits, 0 allocations (",
+            r.driver_allocations, " inside GL calls, the driver's)");
 }
 
 /// Queues GL_INVALID_ENUM as an engine would by mistake; the executor must leave it queued.

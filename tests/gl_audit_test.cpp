@@ -222,3 +222,28 @@ TEST_CASE("the allocation counter sees a std::vector's allocation and 0 in an em
     CHECK_THROWS_AS(second.start(), std::logic_error);
     heap.stop();
 }
+
+TEST_CASE("allocations inside a GL call are the driver's: counted apart, not as the caller's") {
+    penumbra::test::context();
+    namespace detail = penumbra::test::detail;
+    penumbra::test::AllocationCounter heap;
+    heap.start();
+    detail::enterDriverCall();  // what glad's pre-call callback does (support/gl_audit.hpp)
+    int* in_driver = new int(1);
+    delete in_driver;
+    detail::leaveDriverCall();
+    int* ours = new int(2);
+    delete ours;
+    heap.stop();
+    CHECK(heap.allocations() == 1);
+    CHECK(heap.deallocations() == 1);
+    CHECK(heap.driverAllocations() == 1);
+    // Real GL calls go through the callbacks: after them the thread is outside the driver again.
+    CHECK_FALSE(detail::insideDriverCall());
+    GLuint buffer = 0;
+    glCreateBuffers(1, &buffer);
+    glNamedBufferData(buffer, 64, nullptr, GL_DYNAMIC_DRAW);
+    glDeleteBuffers(1, &buffer);
+    CHECK_FALSE(detail::insideDriverCall());
+    CHECK(detail::t_driver_call_depth == 0);
+}

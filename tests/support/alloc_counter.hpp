@@ -13,6 +13,11 @@
 //                              threads (llvmpipe) are not the executor's allocations;
 //   allThreadsAllocations():   calls made on any thread while started;
 //   deallocations():           operator delete calls of a non-null pointer on the starting thread.
+//   driverAllocations():       calls on the starting thread made INSIDE a GL call (between glad's
+//                              pre- and post-call callbacks of support/gl_audit.hpp, see
+//                              support/driver_call.hpp): the driver's, not penumbra's. NVIDIA's
+//                              driver allocates through the program's operator new in draws and
+//                              dispatches; they are left out of allocations().
 // malloc/free called directly (C code, the GL driver) are not seen. Counting neither allocates
 // nor locks (a thread_local pointer and relaxed atomics). One counter per thread at a time.
 //
@@ -24,6 +29,8 @@
 //     CHECK(heap.allocations() == 0);
 #ifndef PENUMBRA_TESTS_SUPPORT_ALLOC_COUNTER_HPP
 #define PENUMBRA_TESTS_SUPPORT_ALLOC_COUNTER_HPP
+
+#include "support/driver_call.hpp"
 
 #include <atomic>
 #include <cstddef>
@@ -68,7 +75,7 @@ public:
         if (detail::t_allocation_counter && detail::t_allocation_counter != this) {
             throw std::logic_error("penumbra::test::AllocationCounter::start: another counter is started on this thread");
         }
-        allocations_ = deallocations_ = bytes_ = 0;
+        allocations_ = deallocations_ = bytes_ = driver_allocations_ = 0;
         all_threads_base_ = detail::allThreadsAllocationCount().load();
         all_threads_ = 0;
         if (detail::t_allocation_counter != this) detail::startedAllocationCounters().fetch_add(1);
@@ -82,8 +89,10 @@ public:
     }
     bool started() const { return detail::t_allocation_counter == this; }
 
-    /// operator new calls on the starting thread while started.
+    /// operator new calls on the starting thread while started, outside GL calls.
     uint64_t allocations() const { return allocations_; }
+    /// operator new calls on the starting thread while started, inside GL calls (the driver's).
+    uint64_t driverAllocations() const { return driver_allocations_; }
     /// Bytes those calls asked for.
     uint64_t bytes() const { return bytes_; }
     /// operator delete calls (non-null) on the starting thread while started.
@@ -97,7 +106,7 @@ public:
 private:
     friend void detail::countAllocation(std::size_t bytes);
     friend void detail::countDeallocation(void* p);
-    uint64_t allocations_ = 0, deallocations_ = 0, bytes_ = 0;
+    uint64_t allocations_ = 0, deallocations_ = 0, bytes_ = 0, driver_allocations_ = 0;
     uint64_t all_threads_base_ = 0, all_threads_ = 0;
 };
 
@@ -107,6 +116,10 @@ inline void countAllocation(std::size_t bytes) {
     if (startedAllocationCounters().load(std::memory_order_relaxed) == 0) return;
     allThreadsAllocationCount().fetch_add(1, std::memory_order_relaxed);
     if (AllocationCounter* counter = t_allocation_counter) {
+        if (insideDriverCall()) {
+            ++counter->driver_allocations_;
+            return;
+        }
         ++counter->allocations_;
         counter->bytes_ += bytes;
     }
@@ -114,7 +127,9 @@ inline void countAllocation(std::size_t bytes) {
 
 inline void countDeallocation(void* p) {
     if (!p || startedAllocationCounters().load(std::memory_order_relaxed) == 0) return;
-    if (AllocationCounter* counter = t_allocation_counter) ++counter->deallocations_;
+    if (AllocationCounter* counter = t_allocation_counter) {
+        if (!insideDriverCall()) ++counter->deallocations_;
+    }
 }
 
 inline void* allocateOrThrow(std::size_t bytes, std::size_t alignment) {

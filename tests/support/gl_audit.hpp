@@ -10,7 +10,9 @@
 //   pre-call:  while a GlAudit is recording, appends the name (a string literal inside glad: no
 //              copy, no allocation) to the audit's preallocated log; always reports a NULL entry
 //              point on stderr, as glad's default does.
-//   post-call: does nothing. glad's DEFAULT pre- and post-callbacks both call glGetError after
+//   both:      mark the thread as inside a driver call (support/driver_call.hpp), so the
+//              allocation counter can leave the driver's own operator new calls out.
+//   post-call: nothing else. glad's DEFAULT pre- and post-callbacks both call glGetError after
 //              every call: they would drain the engine's own errors (a test could then never see
 //              the GL_INVALID_* an executor causes) and hide the executor's own glGetError. Ours
 //              never call GL.
@@ -53,6 +55,7 @@
 #define PENUMBRA_TESTS_SUPPORT_GL_AUDIT_HPP
 
 #include "penumbra/gl/gl.hpp"
+#include "support/driver_call.hpp"
 
 #ifndef GLAD_OPTION_GL_DEBUG
 #error "support/gl_audit.hpp needs glad's debug loader: link penumbra_glad_debug (penumbra_add_test(... GL GLAD_DEBUG))"
@@ -138,9 +141,12 @@ inline void glAuditRecord(GlAudit& audit, const char* name);
 inline void glAuditPreCall(const char* name, GLADapiproc apiproc, int /*len_args*/, ...) {
     if (apiproc == nullptr) std::fprintf(stderr, "GLAD: ERROR %s is NULL!\n", name);
     if (GlAudit* audit = recordingGlAudit().load(std::memory_order_acquire)) glAuditRecord(*audit, name);
+    enterDriverCall();
 }
 
-inline void glAuditPostCall(void* /*ret*/, const char* /*name*/, GLADapiproc /*apiproc*/, int /*len_args*/, ...) {}
+inline void glAuditPostCall(void* /*ret*/, const char* /*name*/, GLADapiproc /*apiproc*/, int /*len_args*/, ...) {
+    leaveDriverCall();
+}
 
 inline bool installGlAuditCallbacks() {
     gladSetGLPreCallback(glAuditPreCall);
