@@ -85,7 +85,7 @@ inline TierState& tierState() {
 inline bool bitwiseTier(const char* what) {
     detail::TierState& state = detail::tierState();
     if (state.bitwise) return true;
-    if (state.skipped[what]++ == 0) MESSAGE("skipped (bitwise tier, ", state.reason, "): ", what);
+    if (state.skipped[what]++ == 0) MESSAGE("skipped (bitwise tier, ", state.reason, "): ", std::string(what));
     return false;
 }
 
