@@ -16,9 +16,11 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -42,7 +44,8 @@ struct Fixture {
     std::unique_ptr<penumbra::scene::GpuScene> gpu;
     std::unique_ptr<penumbra::scene::GBuffer> gbuffer;
     std::vector<glm::vec4> positions, normals;  ///< the true surface points (primary-ray hits) and face normals
-    std::vector<glm::vec4> reconstructed;       ///< what the depth input reconstructs (CPU twin, same bits)
+    std::vector<glm::vec4> reconstructed;       ///< what the depth input reconstructs on the CPU twin
+                                                ///< (the GPU's bits on llvmpipe only: gpuTestedPositions)
     std::vector<uint8_t> closed_per_triangle;
     penumbra::SampleListsView view;
     uint32_t width = 0, height = 0;
@@ -69,8 +72,9 @@ struct Fixture {
     }
     penumbra::SampleDepthInput depthInput() const { return {gbuffer->depthTexture(), gbuffer->faceTexture(), view}; }
     uint32_t samples() const { return width * height; }
-    /// The positions the pipeline tests for this input (what the oracle must be asked about).
-    const std::vector<glm::vec4>& tested(ViewSamples v) const { return v == ViewSamples::Exact ? positions : reconstructed; }
+    /// The CPU twin's view samples for this input (the twin's own reconstruction for the depth
+    /// input). The oracle is asked about gpuTestedPositions instead: what the GPU itself tested.
+    const std::vector<glm::vec4>& twinSamples(ViewSamples v) const { return v == ViewSamples::Exact ? positions : reconstructed; }
 
     penumbra::AliasFreeHardShadows::DrawCasters drawer() const {
         return [this](penumbra::CasterClass cls) {
@@ -109,6 +113,73 @@ penumbra::SampleListsLight pointLight(const Fixture& f, const glm::vec3& positio
 struct Comparison {
     size_t tested = 0, shadowed = 0, mismatched = 0, ties = 0, back_facing = 0, untested = 0;
 };
+
+/// Bound on |GPU - CPU twin| of a depth-input position, relative to sceneScale. The unprojection
+/// (penumbraSampleListsViewPosition) is `precise` (no contraction), but GLSL allows 2.5 ulp for its
+/// divisions against the twin's correctly rounded 0.5: NDC x and y may differ by 3 ulp of 1 (4e-7),
+/// which the inverse view-projection carries into world units of the eye's distance, the sums
+/// after it round at the coordinates' magnitude, and the divide by h.w adds 3 ulp of |p|: about
+/// 1e-6 of S. Measured on an NVIDIA H200: at most 9.1e-7 of S (torus_knot), 1.9e-7 to 2.8e-7 on the
+/// other scenes. 1e-5 leaves a factor of 10, and 1e-5 S (~2e-4 here) is still some 60 times below
+/// a pixel's footprint at 192 x 192 (~1e-2): a wrong pixel, depth or matrix lands far outside it.
+constexpr double kDepthReconstructionBound = 1e-5;
+
+/// The scale S the unprojection's rounding is relative to: the diagonal of the box around the
+/// scene and the eye (the distances unprojected) plus that box's distance from the origin (the
+/// coordinates' magnitude).
+double sceneScale(const Fixture& f) {
+    const auto b = f.scene.bounds();
+    const glm::dvec3 lo = glm::min(glm::dvec3(b.min), glm::dvec3(f.scene.camera.eye));
+    const glm::dvec3 hi = glm::max(glm::dvec3(b.max), glm::dvec3(f.scene.camera.eye));
+    return glm::length(hi - lo) + std::max(glm::length(lo), glm::length(hi));
+}
+
+/// The positions the GPU tested in the last run of `pipeline`, by sample id: what the oracle must
+/// be asked about (exact modes: oracle == GPU at the same float positions). Buffer input: the
+/// G-buffer's points, which the lists copy. Depth input: the lists read back, each listed
+/// sample's position as the GPU reconstructed it (the light pass tests list_positions[slot]);
+/// a sample the lists do not hold (background, outside, back-facing: sample_slots == NO_SLOT)
+/// keeps the twin's position, as before: the comparison skips it anyway, since it compares only
+/// LIT / SHADOWED samples and the GPU decides only listed ones (checked here). Also checks the
+/// GPU's reconstruction against the twin: bit for bit in the bitwise tier, within
+/// kDepthReconstructionBound * sceneScale on any driver.
+std::vector<glm::vec4> gpuTestedPositions(const penumbra::AliasFreeHardShadows& pipeline, const Fixture& f, ViewSamples v,
+                                          const std::vector<uint32_t>& states) {
+    if (v == ViewSamples::Exact) return f.positions;
+    const penumbra::SampleListsCpu lists = penumbra::downloadSampleLists(pipeline.setup(), pipeline.buffers());
+    REQUIRE(lists.sample_slots.size() == f.samples());
+    REQUIRE(states.size() == f.samples());
+    std::vector<glm::vec4> out = f.reconstructed;
+    size_t listed = 0, bad_slot = 0, decided_unlisted = 0, differ = 0;
+    double max_difference = 0.0;
+    for (uint32_t id = 0; id < f.samples(); ++id) {
+        const uint32_t slot = lists.sample_slots[id];
+        if (slot == penumbra::kSampleListsNoSlot) {
+            decided_unlisted += states[id] == PENUMBRA_AFH_LIT || states[id] == PENUMBRA_AFH_SHADOWED;
+            continue;
+        }
+        if (slot >= lists.list_positions.size() || lists.list_ids[slot] != id) {
+            ++bad_slot;
+            continue;
+        }
+        ++listed;
+        const glm::vec4 gpu = lists.list_positions[slot];
+        const glm::vec4 cpu = f.reconstructed[id];
+        differ += std::memcmp(&gpu, &cpu, sizeof(glm::vec3)) != 0 || cpu.w != 1.0f;
+        const double d = cpu.w == 1.0f ? glm::length(glm::dvec3(glm::vec3(gpu)) - glm::dvec3(glm::vec3(cpu)))
+                                       : std::numeric_limits<double>::infinity();
+        max_difference = std::max(max_difference, d);
+        out[id] = glm::vec4(glm::vec3(gpu), 1.0f);
+    }
+    const double scale = sceneScale(f);
+    MESSAGE("depth input: ", listed, " listed samples, ", differ, " reconstructed differently from the CPU twin, max |GPU - twin| ",
+            max_difference, " = ", max_difference / scale, " of the scene scale ", scale);
+    CHECK(bad_slot == 0);          // structure: sample_slots and list_ids agree
+    CHECK(decided_unlisted == 0);  // the GPU decides only samples it listed
+    PENUMBRA_CHECK_BITWISE("depth input: GPU reconstruction == CPU twin reconstructViewSamples", differ == 0);
+    CHECK(max_difference <= kDepthReconstructionBound * scale);
+    return out;
+}
 
 // GPU states vs the exact oracle with the same light point and coplanar rule, on every listed sample.
 Comparison compareWithOracle(const Fixture& f, const std::vector<glm::vec4>& positions,
@@ -219,7 +290,7 @@ TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions
                     const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
                     penumbra::SampleListsLight fitted = light;
                     fitted.view_projection = frame.light_view_projection;
-                    const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.tested(v).data(), f.normals.data(),
+                    const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.twinSamples(v).data(), f.normals.data(),
                                                                 f.samples(), f.casters());
                     size_t differ = 0, shadowed = 0;
                     for (size_t i = 0; i < states.size(); ++i) {
@@ -294,8 +365,10 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                 o.grid_height = height;
                 penumbra::AliasFreeHardShadows pipeline(o);
                 const auto states = runPipeline(pipeline, f, light, v);
-                // Exactness: the oracle on the very same float positions the GPU tested.
-                const Comparison c = compareWithOracle(f, f.tested(v), light, states, o.coplanar_epsilon, 0.0f);
+                // Exactness: the oracle on the very same float positions the GPU tested (for the
+                // depth input, its own reconstruction read back from the lists).
+                const Comparison c =
+                    compareWithOracle(f, gpuTestedPositions(pipeline, f, v, states), light, states, o.coplanar_epsilon, 0.0f);
                 // The Fixed-6 two-pass light pass (default): the triangles that need clipping went
                 // through the spill pass, none was lost.
                 const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
@@ -321,7 +394,8 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                     wide.coplanar_epsilon = kDepthCoplanarEpsilon;
                     penumbra::AliasFreeHardShadows tolerant(wide);
                     const auto wide_states = runPipeline(tolerant, f, light, v);
-                    const Comparison w = compareWithOracle(f, f.tested(v), light, wide_states, wide.coplanar_epsilon, 0.0f);
+                    const Comparison w = compareWithOracle(f, gpuTestedPositions(tolerant, f, v, wide_states), light,
+                                                           wide_states, wide.coplanar_epsilon, 0.0f);
                     CHECK(w.mismatched == 0);
                     const Comparison wt = compareWithOracle(f, f.positions, light, wide_states, wide.coplanar_epsilon, 0.0f, false);
                     MESSAGE("  true-surface disagreement of the depth input: ", t.mismatched, " of ", t.tested,
@@ -709,6 +783,7 @@ penumbra::scene::Scene eyePlaneScene() {
 
 struct RunResult {
     std::vector<uint32_t> states;
+    std::vector<glm::vec4> tested;  ///< the positions the GPU tested (gpuTestedPositions)
     penumbra::AliasFreeHardFrame frame;
     size_t shadowed = 0;
 };
@@ -718,6 +793,7 @@ RunResult runVariant(const Fixture& f, const penumbra::SampleListsLight& light, 
     penumbra::AliasFreeHardShadows pipeline(o);
     RunResult r;
     r.states = runPipeline(pipeline, f, light, v);
+    r.tested = gpuTestedPositions(pipeline, f, v, r.states);
     r.frame = pipeline.readFrame();
     for (uint32_t s : r.states) r.shadowed += s == PENUMBRA_AFH_SHADOWED;
     return r;
@@ -800,7 +876,7 @@ TEST_CASE("Fixed-6 two-pass: casters crossing the light's eye plane give the Exa
         penumbra::SampleListsLight fitted = light;
         fitted.view_projection = two_pass.frame.light_view_projection;
         const uint64_t predicted = penumbra::afhSpilledTriangles(o, fitted, f.casters());
-        const Comparison c = compareWithOracle(f, f.tested(v), light, two_pass.states, o.coplanar_epsilon, 0.0f);
+        const Comparison c = compareWithOracle(f, two_pass.tested, light, two_pass.states, o.coplanar_epsilon, 0.0f);
         MESSAGE("eye-plane strip (", strip_triangles, " of ", f.gpu->triangleCount(), " triangles), ", input,
                 " input: spilled ", two_pass.frame.spilled, " (CPU predicate ", predicted, "), overflow ",
                 two_pass.frame.spill_overflow, "; ", c.tested, " samples, ", c.shadowed, " shadowed, mismatched ",
@@ -824,7 +900,7 @@ TEST_CASE("Fixed-6 two-pass: casters crossing the light's eye plane give the Exa
         CHECK(c.tested > 128 * 96 / 8);
         CHECK(c.shadowed > 500);
         // GPU == CPU twin.
-        const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.tested(v).data(), f.normals.data(), f.samples(), f.casters());
+        const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.twinSamples(v).data(), f.normals.data(), f.samples(), f.casters());
         PENUMBRA_CHECK_BITWISE("hard pipeline Fixed-6 two-pass states GPU == CPU twin", two_pass.states == cpu);
     }
 }

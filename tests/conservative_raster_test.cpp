@@ -4,7 +4,9 @@
 // variant (sub-pixel .. screen-size, 1e5-pixel vertices, slivers, collinear and coincident points,
 // pixel-grid vertices touching pixel boundaries, near-plane crossings, random clip space, NaN/Inf)
 // must miss 0 pixels the exact predicate requires, and the GPU's fragments must match the CPU
-// twin's prediction up to pixels whose centre lies within the subpixel snap of the hull boundary.
+// twin's prediction up to pixels whose centre lies within the subpixel snap of the hull boundary
+// (bitwise tier; on any driver: differences on <= 2% of the predicted pixels, none more than 1 px
+// from the prediction).
 // Coverage is recorded per triangle in a 32 x 32 tile bitset (PENUMBRA_CONSERVATIVE_RECORD), and
 // the ground truth is computed from the clip coordinates the geometry stage itself recorded.
 // Seeds are printed; PENUMBRA_SEED=<n> replays one. The `stress` suite runs 10^6 per variant.
@@ -257,6 +259,9 @@ struct CoverageStats {
     uint64_t triangles = 0, required = 0, covered = 0, fragments = 0, missed = 0, missed_triangles = 0;
     uint64_t extra = 0, max_extra = 0, unchecked = 0, outside = 0, duplicates = 0;
     uint64_t predicted_but_absent = 0, present_but_unpredicted = 0, uncertain = 0;
+    // The twin's predicted fragments (certain, in the tile), and the GPU's unpredicted fragments
+    // more than 1 pixel (Chebyshev) from every pixel the twin predicts or leaves uncertain.
+    uint64_t predicted = 0, unpredicted_far = 0;
     uint64_t nonfinite_with_fragments = 0, record_mismatches = 0;
     // Fixed-6 two-pass plan: triangles the CPU predicate says the direct pass spills, what the GPU's
     // spill header reports (count / 3 + overflow), and overflows; hulls over 6 vertices outside it.
@@ -273,6 +278,7 @@ struct CoverageStats {
         max_extra = std::max(max_extra, o.max_extra), unchecked += o.unchecked, outside += o.outside;
         duplicates += o.duplicates, predicted_but_absent += o.predicted_but_absent;
         present_but_unpredicted += o.present_but_unpredicted, uncertain += o.uncertain;
+        predicted += o.predicted, unpredicted_far += o.unpredicted_far;
         nonfinite_with_fragments += o.nonfinite_with_fragments, record_mismatches += o.record_mismatches;
         spill_predicted += o.spill_predicted, spill_gpu += o.spill_gpu, spill_overflow += o.spill_overflow;
         direct_over_six += o.direct_over_six, twin_spill_disagreements += o.twin_spill_disagreements;
@@ -299,7 +305,8 @@ struct CoverageStats {
             << static_cast<double>(extra) / static_cast<double>(std::max<uint64_t>(required, 1))
             << "; fragments/triangle " << static_cast<double>(fragments) / t << "; GPU vs CPU-twin raster: "
             << predicted_but_absent << " predicted-but-absent, " << present_but_unpredicted
-            << " unpredicted, " << uncertain << " pixels within the snap tolerance; duplicate fragments "
+            << " unpredicted (" << unpredicted_far << " more than 1 px from the prediction) of " << predicted
+            << " predicted, " << uncertain << " pixels within the snap tolerance; duplicate fragments "
             << duplicates << "; hull kinds dropped/culled/triangle/clipped/thin/fallback = " << kinds[0] << "/"
             << kinds[1] << "/" << kinds[2] << "/" << kinds[3] << "/" << kinds[4] << "/" << kinds[5];
         if (two_pass) {
@@ -407,6 +414,7 @@ void checkTriangle(const ConservativeRasterSetup& setup, const glm::vec4 (&clip)
         const bool set = bit(p, &checked);
         if (!checked) continue;
         allowed[static_cast<size_t>(p.y - tile_rel.y)] |= 1u << (p.x - tile_rel.x);
+        stats.predicted++;
         if (!set) stats.predicted_but_absent++;
     }
     for (const auto& p : raster.uncertain) {
@@ -415,10 +423,27 @@ void checkTriangle(const ConservativeRasterSetup& setup, const glm::vec4 (&clip)
         if (checked) allowed[static_cast<size_t>(p.y - tile_rel.y)] |= 1u << (p.x - tile_rel.x);
     }
     stats.uncertain += raster.uncertain.size();
-    uint64_t unpredicted = 0;
-    for (int r = 0; r < kTile; ++r) unpredicted += std::bitset<32>(words[r] & ~allowed[static_cast<size_t>(r)]).count();
+    // `near`: the allowed pixels dilated by one pixel in x, y and diagonally (Chebyshev distance 1).
+    std::array<uint32_t, kTile> near{};
+    for (int r = 0; r < kTile; ++r) {
+        const uint32_t row = allowed[static_cast<size_t>(r)];
+        const uint32_t wide = row | (row << 1) | (row >> 1);
+        near[static_cast<size_t>(r)] |= wide;
+        if (r > 0) near[static_cast<size_t>(r - 1)] |= wide;
+        if (r + 1 < kTile) near[static_cast<size_t>(r + 1)] |= wide;
+    }
+    uint64_t unpredicted = 0, far = 0;
+    for (int r = 0; r < kTile; ++r) {
+        unpredicted += std::bitset<32>(words[r] & ~allowed[static_cast<size_t>(r)]).count();
+        far += std::bitset<32>(words[r] & ~near[static_cast<size_t>(r)]).count();
+    }
     stats.present_but_unpredicted += unpredicted;
-    if (unpredicted && stats.failures.size() < 8) {
+    stats.unpredicted_far += far;
+    // Far ones fail the portable tier; keep room for them among the first failures.
+    if (far && stats.failures.size() < 8) {
+        stats.failures.push_back("GPU fragments more than 1 px from the twin's prediction: " + std::to_string(far) + " in " +
+                                 categoryName(category) + " triangle " + describeClip(clip));
+    } else if (unpredicted && stats.failures.size() < 4) {
         stats.failures.push_back("GPU fragments the twin does not predict: " + std::to_string(unpredicted) + " in " +
                                  categoryName(category) + " triangle " + describeClip(clip));
     }
@@ -620,8 +645,29 @@ void requireClean(const CoverageStats& s, bool expect_prediction = true) {
         CHECK(s.spill_overflow == 0);
     }
     if (expect_prediction) {
-        CHECK(s.predicted_but_absent == 0);
-        CHECK(s.present_but_unpredicted == 0);
+        // Which pixels the GPU emits, outside the snap tolerance, is a float-exact property: the
+        // geometry stage builds the expanded polygon with float operations a driver may fuse (a*b+c)
+        // or round within GLSL's ulps (the perspective divide, the case-iii normalisation), and
+        // hardware decides pixel centres exactly on an edge by its own snapped edge functions.
+        PENUMBRA_CHECK_BITWISE("conservative raster: every fragment the CPU twin predicts is emitted",
+                               s.predicted_but_absent == 0);
+        PENUMBRA_CHECK_BITWISE("conservative raster: the GPU emits no fragment the CPU twin does not predict",
+                               s.present_but_unpredicted == 0);
+        // Portable: conservativeness is `missed == 0` above (the exact double-precision predicate).
+        // The rest is bounded. Rounding alone moves the GPU's hull vertices by a few ulps of the
+        // window coordinate (2^-9 px per ulp at 16384 px), far inside kPredictionTolerance, so it
+        // only flips pixels the twin already calls uncertain. What moves pixels beyond that are the
+        // discrete decisions the emitter takes on those floats: an edge direction within rounding
+        // of an axis picks the neighbouring corner of the dilation square, so a Fixed-6 corner gains
+        // or loses its case-iii extension (2h ~ 1 px past the corner, which over-covers by at most
+        // one pixel: sintorn2008 §3.2), and the thin test on an area at its threshold swaps the
+        // hexagon for the thin hull (both contain the triangle dilated by h; they differ by the
+        // thickness, << 1 px, and by case-iii corners). Either way an extra fragment lies within 1
+        // pixel (Chebyshev) of a pixel the twin predicts or leaves uncertain, and the differences
+        // are rare: the H200 (driver 580.159) differed on 743 pixels of 127 740 predicted (0.58%)
+        // in the 16384^2 Fixed-6 run, its worst case (sub-pixel triangles), and on 0 elsewhere.
+        CHECK(s.unpredicted_far == 0);
+        CHECK((s.predicted_but_absent + s.present_but_unpredicted) * 100 <= 2 * s.predicted);
     }
 }
 
@@ -1327,7 +1373,7 @@ TEST_CASE("gl: emitted depth follows the triangle's plane inside it") {
         p.use();
         glUniform1ui(8, 0u);
         glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, params.id());
-        double worst = 0;
+        double worst = 0, steepest = 0;  // steepest: the largest |dz/dx| + |dz/dy| (window depth per pixel)
         size_t checked = 0, marked = 0;
         for (int iteration = 0; iteration < 60; ++iteration) {
             glm::vec4 v[3];
@@ -1362,6 +1408,9 @@ TEST_CASE("gl: emitted depth follows the triangle's plane inside it") {
                 zc[k] = static_cast<double>(v[k].z) / v[k].w;
             }
             const double a2 = (pc[1].x - pc[0].x) * (pc[2].y - pc[0].y) - (pc[1].y - pc[0].y) * (pc[2].x - pc[0].x);
+            const double gx = 0.5 * ((zc[1] - zc[0]) * (pc[2].y - pc[0].y) - (zc[2] - zc[0]) * (pc[1].y - pc[0].y)) / a2;
+            const double gy = 0.5 * ((zc[2] - zc[0]) * (pc[1].x - pc[0].x) - (zc[1] - zc[0]) * (pc[2].x - pc[0].x)) / a2;
+            steepest = std::max(steepest, std::abs(gx) + std::abs(gy));
             for (int y = 0; y < size; ++y) {
                 for (int x = 0; x < size; ++x) {
                     marked += marks[y * size + x] == 1u;
@@ -1379,9 +1428,17 @@ TEST_CASE("gl: emitted depth follows the triangle's plane inside it") {
             }
         }
         MESSAGE(std::string(penumbra::conservativeVariantName(variant)), ": depth at ", checked, " interior pixel centres within ", worst,
-                " of the triangle's plane; ", marked, " pixels marked with id 1");
+                " of the triangle's plane (steepest plane ", steepest, " per pixel); ", marked, " pixels marked with id 1");
         CHECK(checked > 5000);
-        CHECK(worst < 2e-5);
+        // 2e-5 holds where the rasteriser interpolates in correctly rounded float (llvmpipe: < 1e-6).
+        // GL leaves the precision of depth interpolation to the implementation, and hardware
+        // interpolates from hull vertices snapped to its subpixel grid (up to 2^-9 px at 8 bits)
+        // that lie up to 1.5 px outside the triangle, so its error scales with the plane's slope
+        // (here up to ~0.1 per pixel): the H200 (driver 580.159) measured 9.2e-5 (Fixed-6) and
+        // 1.08e-4 (Exact). The portable bound, 5e-4, is about 4.6x that and 1/1000 of the range of
+        // window depths drawn (0.25 .. 0.75).
+        PENUMBRA_CHECK_BITWISE("conservative raster: emitted depth within 2e-5 of the triangle's plane", worst < 2e-5);
+        CHECK(worst < 5e-4);
         CHECK(marked > checked);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glDisable(GL_DEPTH_TEST);
