@@ -572,10 +572,30 @@ uint32_t checkReplay(const SampleListsSetup& setup, const SampleListsLight& ligh
     const penumbra::SampleListsFrustum f_exec = penumbra::SampleListBuilder::readFrustum(executor_lists.ids().frustum);
     const penumbra::SampleListsFrustum f_replay = penumbra::SampleListBuilder::readFrustum(replay_lists.ranges.frustum);
     CHECK(std::memcmp(&f_exec, &f_replay, sizeof f_exec) == 0);
+    if (!build.fit_frustum) {
+        // Without the fit both hold the block their Upload step wrote; nothing may overwrite it.
+        CHECK(std::memcmp(&f_exec, &plan.frustum, sizeof f_exec) == 0);
+        CHECK(std::memcmp(&f_replay, &plan.frustum, sizeof f_replay) == 0);
+    }
 
     SampleListsLight used = light;
     if (build.fit_frustum) used.view_projection = f_replay.view_projection;
     const SampleListsCpu cpu = cpu_build(used);
+    if (h_exec.accepted != h_replay.accepted) {
+        // Seen on NVIDIA (H200, 580.159): the replay into one arena buffer accepted fewer samples
+        // than the executor. Replay once more into separate buffers (the executor's layout) to tell
+        // the arena's shared buffer from the plan itself, and name who agrees with the CPU twin.
+        GpuLists separate_lists(setup);
+        separate_lists.poison();
+        penumbra::SampleListsPlanOptions separate_options = builder().planOptions(0, 0);
+        if (bindings) separate_options.bindings = *bindings;
+        const penumbra::SampleListsPlan separate_plan = penumbra::planSampleLists(
+            setup, light, options, build, kind, depth_input ? &depth_input->view : nullptr, separate_options);
+        replaySampleListsPlan(separate_plan, buffer_input, depth_input, separate_lists.ids());
+        const penumbra::SampleListsHeader h_separate = penumbra::SampleListBuilder::readHeader(separate_lists.ids().header);
+        MESSAGE("accepted: executor ", h_exec.accepted, ", replay into one arena ", h_replay.accepted,
+                ", replay into separate buffers ", h_separate.accepted, ", CPU twin ", cpu.header.accepted);
+    }
     PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(replayed, cpu) == "");
     if (build.statistics) {
         CHECK(penumbra::sampleListStatisticsFromHeader(setup, h_replay) == penumbra::sampleListStatisticsCpu(cpu));
