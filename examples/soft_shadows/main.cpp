@@ -16,7 +16,9 @@
 //       sintorn2008 §4): G-buffer or depth-buffer view samples, K sets of N light samples chosen
 //       per pixel, the light-sample LUT generated on the GPU, influence regions, resolve;
 //       --reference compares every bit with the oracle on the same float view samples and the
-//       same light samples (JSON reference.mismatched_bits, total_bits, ties, visibility_rmse) and
+//       same light samples (JSON reference.mismatched_bits, total_bits, ties, visibility_rmse;
+//       depth view samples: the positions the GPU reconstructed, read back from its lists,
+//       reference.gpu_reconstruction_differs of them differing from the CPU twin's) and
 //       writes <out>_reference.png (the oracle's image) and <out>_error.png (|error| heat map).
 //       --frames F runs the pipeline F times, every pixel with a fresh selection word each frame,
 //       and writes the running average (JSON temporal.*: RMSE against an oracle image per frame).
@@ -944,6 +946,24 @@ struct GpuViewSamples {
         glFinish();
         ms = msSince(t0);
     }
+    /// Depth input: replaces `positions` with the positions the GPU reconstructed and tested, read
+    /// back from a pipeline's lists (what the oracle must be asked about: a driver whose division
+    /// and FMA round unlike the CPU twin reconstructs other last bits than reconstructViewSamples;
+    /// on llvmpipe they are the same). Samples the lists do not hold keep the twin's position.
+    /// Returns how many listed samples differ from the twin. Reads back and waits: after the frame.
+    size_t adoptGpuPositions(const penumbra::SampleListsSetup& setup, const penumbra::SampleListsBuffers& buffers) {
+        if (!depth_input) return 0;
+        const penumbra::SampleListsCpu lists = penumbra::downloadSampleLists(setup, buffers);
+        size_t differ = 0;
+        for (size_t id = 0; id < positions.size() && id < lists.sample_slots.size(); ++id) {
+            const uint32_t slot = lists.sample_slots[id];
+            if (slot == penumbra::kSampleListsNoSlot || slot >= lists.list_ids.size() || lists.list_ids[slot] != id) continue;
+            const glm::vec4 tested(glm::vec3(lists.list_positions[slot]), 1.0f);
+            differ += std::memcmp(&tested, &positions[id], sizeof tested) != 0;
+            positions[id] = tested;
+        }
+        return differ;
+    }
     bool surface(size_t pixel) const { return exact_positions[pixel].w != 0.0f; }
     uint32_t triangle(size_t pixel) const {
         uint32_t t = 0;
@@ -1402,7 +1422,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::gl::HeadlessContext context;
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height;
-    const GpuViewSamples v(args, scene, gpu);
+    GpuViewSamples v(args, scene, gpu);
     if (args.aa != "off") return runHardAa(args, oracle, merged, light_pos, gpu, v, context.renderer(), load_ms, t_start);
     const double gbuffer_ms = v.ms;
     const bool depth_input = v.depth_input;
@@ -1444,6 +1464,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     auto t0 = std::chrono::steady_clock::now();
     const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();
     const std::vector<uint32_t> states = pipeline.stateBuffer().download<uint32_t>(0, size_t(w) * h);
+    const size_t reconstructed_differently = v.adoptGpuPositions(pipeline.setup(), pipeline.buffers());
 
     // --check-skips: the same frame with every skip off, state by state.
     Json skips_check;
@@ -1534,6 +1555,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         if (args.reference) {
             j["reference"] = {{"samples", same.samples}, {"mismatched", same.mismatched}, {"ties", same.ties}};
             if (depth_input) {
+                j["reference"]["gpu_reconstruction_differs"] = reconstructed_differently;
                 j["reference"]["true_surface"] = {{"samples", true_surface.samples},
                                                   {"mismatched", true_surface.mismatched},
                                                   {"ties", true_surface.ties}};
@@ -1596,7 +1618,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::gl::HeadlessContext context;
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height, n = args.samples, k = args.sets;
-    const GpuViewSamples v(args, scene, gpu);
+    GpuViewSamples v(args, scene, gpu);
     const penumbra::SoftMode mode = args.lut == "exact" ? penumbra::SoftMode::Exact
                                     : args.lut == "lut" ? penumbra::SoftMode::Lut
                                                         : penumbra::SoftMode::Brute;
@@ -1734,6 +1756,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     if (shadows_ms < 0) return 1;
     const penumbra::SampleBasedSoftFrame frame = pipeline.readFrame();
     std::vector<float> gpu_visibility = pipeline.readVisibility();  // frame 0's; --frames: the last frame's
+    const size_t reconstructed_differently = v.adoptGpuPositions(pipeline.setup(), pipeline.buffers());
     const uint32_t words = pipeline.wordsPerSample();
     // SoftSkips::silhouettes: light texels inside some potential silhouette's region.
     uint64_t penumbra_texels = 0;
@@ -1955,6 +1978,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                           {"visibility_rmse", compared ? std::sqrt(squares / double(compared)) : 0.0},
                           {"view_samples", compared},
                           {"mismatched_view_samples", mismatched_samples},
+                          {"gpu_reconstruction_differs", reconstructed_differently},
                           {"png", siblingPath(args.out, "_reference")},
                           {"error_png", siblingPath(args.out, "_error")},
                           {"error_png_scale", error_scale}};
