@@ -149,7 +149,7 @@ std::vector<glm::vec4> gpuTestedPositions(const penumbra::AliasFreeHardShadows& 
     const penumbra::SampleListsCpu lists = penumbra::downloadSampleLists(pipeline.setup(), pipeline.buffers());
     REQUIRE(lists.sample_slots.size() == f.samples());
     REQUIRE(states.size() == f.samples());
-    std::vector<glm::vec4> out = f.reconstructed;
+    const std::vector<glm::vec4> out = penumbra::listedPositions(lists, f.reconstructed);
     size_t listed = 0, bad_slot = 0, decided_unlisted = 0, differ = 0;
     double max_difference = 0.0;
     for (uint32_t id = 0; id < f.samples(); ++id) {
@@ -163,13 +163,12 @@ std::vector<glm::vec4> gpuTestedPositions(const penumbra::AliasFreeHardShadows& 
             continue;
         }
         ++listed;
-        const glm::vec4 gpu = lists.list_positions[slot];
+        const glm::vec4 gpu = out[id];
         const glm::vec4 cpu = f.reconstructed[id];
         differ += std::memcmp(&gpu, &cpu, sizeof(glm::vec3)) != 0 || cpu.w != 1.0f;
         const double d = cpu.w == 1.0f ? glm::length(glm::dvec3(glm::vec3(gpu)) - glm::dvec3(glm::vec3(cpu)))
                                        : std::numeric_limits<double>::infinity();
         max_difference = std::max(max_difference, d);
-        out[id] = glm::vec4(glm::vec3(gpu), 1.0f);
     }
     const double scale = sceneScale(f);
     MESSAGE("depth input: ", listed, " listed samples, ", differ, " reconstructed differently from the CPU twin, max |GPU - twin| ",

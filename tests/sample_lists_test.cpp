@@ -690,6 +690,22 @@ TEST_CASE("setup, parameters and shadow-bit sizing validate and name bad values"
     }
 }
 
+TEST_CASE("listedPositions: the lists' position for every listed sample, the fallback for the rest") {
+    SampleListsCpu lists;
+    lists.sample_slots = {1u, penumbra::kSampleListsNoSlot, 0u, 1u, 7u};
+    lists.list_ids = {2u, 0u};
+    lists.list_positions = {glm::vec4(1, 2, 3, 1), glm::vec4(4, 5, 6, 0)};
+    const std::vector<glm::vec4> fallback = {glm::vec4(-1), glm::vec4(-2), glm::vec4(-3), glm::vec4(-4), glm::vec4(-5)};
+    const std::vector<glm::vec4> out = penumbra::listedPositions(lists, fallback);
+    REQUIRE(out.size() == 5);
+    CHECK(out[0] == glm::vec4(4, 5, 6, 1));  // slot 1 holds sample 0; w is always 1
+    CHECK(out[1] == glm::vec4(-2));          // not listed
+    CHECK(out[2] == glm::vec4(1, 2, 3, 1));  // slot 0 holds sample 2
+    CHECK(out[3] == glm::vec4(-4));          // slot 1 names sample 0, not 3: broken, fallback
+    CHECK(out[4] == glm::vec4(-5));          // slot 7 is past the lists
+    CHECK(penumbra::listedPositions(lists, {glm::vec4(9)}) == std::vector<glm::vec4>{glm::vec4(4, 5, 6, 1)});
+}
+
 TEST_CASE("texel borders, frustum, near/far, NaN/Inf, background and back-facing follow the rules (closed form)") {
     context();
     // Directional light straight down -z onto an 8 x 4 grid: view = translate(0, 0, -5) exactly,

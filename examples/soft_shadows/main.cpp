@@ -953,15 +953,10 @@ struct GpuViewSamples {
     /// Returns how many listed samples differ from the twin. Reads back and waits: after the frame.
     size_t adoptGpuPositions(const penumbra::SampleListsSetup& setup, const penumbra::SampleListsBuffers& buffers) {
         if (!depth_input) return 0;
-        const penumbra::SampleListsCpu lists = penumbra::downloadSampleLists(setup, buffers);
+        const std::vector<glm::vec4> tested = penumbra::listedPositions(penumbra::downloadSampleLists(setup, buffers), positions);
         size_t differ = 0;
-        for (size_t id = 0; id < positions.size() && id < lists.sample_slots.size(); ++id) {
-            const uint32_t slot = lists.sample_slots[id];
-            if (slot == penumbra::kSampleListsNoSlot || slot >= lists.list_ids.size() || lists.list_ids[slot] != id) continue;
-            const glm::vec4 tested(glm::vec3(lists.list_positions[slot]), 1.0f);
-            differ += std::memcmp(&tested, &positions[id], sizeof tested) != 0;
-            positions[id] = tested;
-        }
+        for (size_t id = 0; id < positions.size(); ++id) differ += std::memcmp(&tested[id], &positions[id], sizeof(glm::vec4)) != 0;
+        positions = tested;
         return differ;
     }
     bool surface(size_t pixel) const { return exact_positions[pixel].w != 0.0f; }

@@ -577,14 +577,33 @@ inline SampleListsCpu buildSampleListsCpu(const SampleListsSetup& setup, const S
 }
 
 /// The positions the depth input reconstructs (twin of penumbraSampleListsViewPosition; w = 0 for
-/// background), by sample id y * width + x: what the GPU's lists hold for a depth build, e.g. to
-/// ask the oracle about the very same float positions.
+/// background), by sample id y * width + x: bit for bit what the GPU's lists hold for a depth build
+/// where floats round correctly and never fuse (llvmpipe). Other drivers may differ in the last
+/// bits (GLSL allows 2.5 ulp per division): ask the oracle about listedPositions instead.
 inline std::vector<glm::vec4> reconstructViewSamples(const SampleListsView& view, const float* depth) {
     std::vector<glm::vec4> out(size_t(view.width) * view.height);
     for (size_t id = 0; id < out.size(); ++id) {
         out[id] = detail::viewPosition(view.inverse_view_projection, uint32_t(id % view.width),
                                        uint32_t(id / view.width), view.width, view.height, depth[id],
                                        view.depth_zero_to_one);
+    }
+    return out;
+}
+
+/// The positions a build tested, by sample id: list_positions[slot] (w = 1) for every sample the
+/// lists hold, `fallback[id]` for the others (background, rejected, or a slot whose list_ids entry
+/// names another sample: a broken structure, which sampleListsDifference and the invariants
+/// report). For a GPU depth build (downloadSampleLists) these are the GPU's own reconstructions:
+/// what the oracle must be asked about on any driver. `fallback` has one entry per sample.
+inline std::vector<glm::vec4> listedPositions(const SampleListsCpu& lists, const std::vector<glm::vec4>& fallback) {
+    std::vector<glm::vec4> out = fallback;
+    for (size_t id = 0; id < out.size() && id < lists.sample_slots.size(); ++id) {
+        const uint32_t slot = lists.sample_slots[id];
+        if (slot == kSampleListsNoSlot || slot >= lists.list_ids.size() || slot >= lists.list_positions.size() ||
+            lists.list_ids[slot] != id) {
+            continue;
+        }
+        out[id] = glm::vec4(glm::vec3(lists.list_positions[slot]), 1.0f);
     }
     return out;
 }
