@@ -582,9 +582,16 @@ uint32_t checkReplay(const SampleListsSetup& setup, const SampleListsLight& ligh
     if (build.fit_frustum) used.view_projection = f_replay.view_projection;
     const SampleListsCpu cpu = cpu_build(used);
     if (h_exec.accepted != h_replay.accepted) {
-        // Seen on NVIDIA (H200, 580.159): the replay into one arena buffer accepted fewer samples
-        // than the executor. Replay once more into separate buffers (the executor's layout) to tell
-        // the arena's shared buffer from the plan itself, and name who agrees with the CPU twin.
+        // Seen on NVIDIA (H200, 580.159), moved bindings without the fit: the replay into one arena
+        // buffer accepted fewer samples than the executor and its frustum bytes differed. Replay
+        // again into separate buffers (the executor's layout) and into an arena with the default
+        // binding points, to tell the arena, the binding points and the plan apart; name who
+        // agrees with the CPU twin, and whether classification or counting went wrong.
+        auto classified = [](const penumbra::SampleListsHeader& h) {
+            uint64_t sum = h.accepted;
+            for (uint32_t r : h.rejected) sum += r;
+            return sum;
+        };
         GpuLists separate_lists(setup);
         separate_lists.poison();
         penumbra::SampleListsPlanOptions separate_options = builder().planOptions(0, 0);
@@ -593,8 +600,20 @@ uint32_t checkReplay(const SampleListsSetup& setup, const SampleListsLight& ligh
             setup, light, options, build, kind, depth_input ? &depth_input->view : nullptr, separate_options);
         replaySampleListsPlan(separate_plan, buffer_input, depth_input, separate_lists.ids());
         const penumbra::SampleListsHeader h_separate = penumbra::SampleListBuilder::readHeader(separate_lists.ids().header);
-        MESSAGE("accepted: executor ", h_exec.accepted, ", replay into one arena ", h_replay.accepted,
-                ", replay into separate buffers ", h_separate.accepted, ", CPU twin ", cpu.header.accepted);
+        ArenaLists default_lists(setup, uint64_t(std::max({ssbo_alignment, ubo_alignment, 16})));
+        const penumbra::SampleListsPlan default_plan = penumbra::planSampleLists(
+            setup, light, options, build, kind, depth_input ? &depth_input->view : nullptr,
+            builder().planOptions(default_lists.ranges.counts.offset, default_lists.ranges.offsets.offset));
+        replaySampleListsPlan(default_plan, buffer_input, depth_input, default_lists.ranges);
+        const penumbra::SampleListsHeader h_default = penumbra::SampleListBuilder::readHeader(default_lists.ranges.header);
+        const penumbra::SampleListsFrustum f_default = penumbra::SampleListBuilder::readFrustum(default_lists.ranges.frustum);
+        MESSAGE("accepted (of classified): executor ", h_exec.accepted, " (", classified(h_exec),
+                "), replay into one arena ", h_replay.accepted, " (", classified(h_replay),
+                "), into separate buffers ", h_separate.accepted, " (", classified(h_separate),
+                "), into an arena with the default binding points ", h_default.accepted, " (", classified(h_default),
+                "), CPU twin ", cpu.header.accepted, "; frustum bytes: arena replay ",
+                std::memcmp(&f_replay, &f_exec, sizeof f_exec) == 0 ? "==" : "!=", " executor, default-binding replay ",
+                std::memcmp(&f_default, &f_exec, sizeof f_exec) == 0 ? "==" : "!=", " executor");
     }
     PENUMBRA_CHECK_BITWISE("sample lists GPU == CPU twin", penumbra::sampleListsDifference(replayed, cpu) == "");
     if (build.statistics) {
@@ -1486,7 +1505,8 @@ TEST_CASE("RHI-style replay: the plan recorded with raw GL calls equals the exec
     const uint32_t seed = testSeed(9);
     std::mt19937 rng(seed);
     const std::pair<uint32_t, uint32_t> grids[] = {{64, 48}, {300, 200}, {1, 1}, {257, 129}};
-    // Other binding points than the defaults: the plan's defines and bindings follow them.
+    // Other binding points than the defaults: the plan's defines and bindings follow them. Each size
+    // runs the four combinations of (fit or upload of the frustum) x (default or these points).
     penumbra::SampleListsBindingPoints moved;
     moved.params = 2;
     moved.frustum = 3;
@@ -1506,7 +1526,7 @@ TEST_CASE("RHI-style replay: the plan recorded with raw GL calls equals the exec
     uint64_t accepted = 0;
     // Buffer input.
     for (size_t n : {size_t(0), size_t(1), size_t(255), size_t(256), size_t(257), size_t(65537)}) {
-        for (int config = 0; config < 2; ++config) {
+        for (int config = 0; config < 4; ++config) {
             const auto grid = grids[(round++) % 4];
             CAPTURE(n);
             CAPTURE(config);
@@ -1518,18 +1538,18 @@ TEST_CASE("RHI-style replay: the plan recorded with raw GL calls equals the exec
             SampleListsOptions options;
             options.cull_back_facing = round % 4 != 1;
             penumbra::SampleListsBuild build;
-            build.fit_frustum = build.statistics = config == 1;
+            build.fit_frustum = build.statistics = (config & 1) != 0;
             auto positions = gl::Buffer::fromVector(samples.positions);
             auto normals = gl::Buffer::fromVector(samples.normals);
             const penumbra::SampleBufferInput input = bufferInput(positions, normals);
-            accepted += checkReplay(setup, light, options, build, round % 2 ? &moved : nullptr, &input, nullptr,
+            accepted += checkReplay(setup, light, options, build, (config & 2) != 0 ? &moved : nullptr, &input, nullptr,
                                     [&](const SampleListsLight& l) { return cpuBuild(setup, l, samples, options); });
         }
     }
     // Depth input: 1, 255, 256, 257 and 65 792 samples.
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f), d01(0.0f, 1.0f);
     for (auto size : {std::pair<uint32_t, uint32_t>{1, 1}, {255, 1}, {16, 16}, {257, 1}, {256, 257}}) {
-        for (int config = 0; config < 2; ++config) {
+        for (int config = 0; config < 4; ++config) {
             const auto grid = grids[(round++) % 4];
             const uint32_t vw = size.first, vh = size.second;
             CAPTURE(vw);
@@ -1563,10 +1583,10 @@ TEST_CASE("RHI-style replay: the plan recorded with raw GL calls equals the exec
             SampleListsOptions options;
             options.cull_back_facing = round % 4 != 2;
             penumbra::SampleListsBuild build;
-            build.fit_frustum = build.statistics = config == 1;
+            build.fit_frustum = build.statistics = (config & 1) != 0;
             const SampleListsSetup setup = penumbra::sampleListsSetup(grid.first, grid.second, depth.size());
             const penumbra::SampleDepthInput input{depth_texture.id(), normal_texture.id(), view};
-            accepted += checkReplay(setup, light, options, build, round % 2 ? &moved : nullptr, nullptr, &input,
+            accepted += checkReplay(setup, light, options, build, (config & 2) != 0 ? &moved : nullptr, nullptr, &input,
                                     [&](const SampleListsLight& l) {
                                         return penumbra::buildSampleListsCpu(setup, l, view, depth.data(),
                                                                              normals.data(), options);
