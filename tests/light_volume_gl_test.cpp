@@ -4,10 +4,12 @@
 // required to be closed (the watertight checks of light_volume_test on the GPU's mesh).
 #include <penumbra/airlight.hpp>
 #include <penumbra/gl/light_volume.hpp>
+#include <penumbra/gl/state.hpp>
 #include <penumbra/light_volume.hpp>
 #include <penumbra/reference/light_shafts.hpp>
 
 #include "support/per_frame_contract.hpp"
+#include "support/engine_state.hpp"
 #include "support/gl_test_support.hpp"
 #include "shader_catalog.hpp"
 #include "support/light_volume_maps.hpp"
@@ -405,6 +407,54 @@ TEST_CASE("GPU light-volume render == its CPU twin (crossings of the volume, cla
     MESSAGE("behind a wall: max |shafts - none| ", wall_difference, "; without the wall ", open_difference);
     CHECK(open_difference > 1e-3 * peak);
     CHECK(wall_difference <= 1e-6 * peak);  // blending order only (the crossings in front are the same surfaces)
+}
+
+TEST_CASE("GPU light-volume render: the engine's raster state (scissor, colour mask, clip control, ...) changes no pixel") {
+    // The accumulation clear obeys the scissor test and the colour mask, the volume's draw the
+    // polygon mode, clip planes and clip control (whose origin flips gl_FrontFacing, the sign of a
+    // crossing): render() sets them (penumbra::gl::setPassRasterState).
+    penumbra::test::context();
+    const penumbra::test::ShaftScene scene = penumbra::test::shaftScene(true);
+    const penumbra::AirlightSetup airlight = tableFog();
+    const uint32_t w = 64, h = 48;
+    const glm::dvec3 eye(5.0, 1.5, 6.0), target(0.0, 1.0, 0.0);
+    const std::vector<glm::dvec3> dirs = penumbra::test::rays(eye, target, w, h);
+    std::vector<double> ground(dirs.size());
+    for (size_t i = 0; i < dirs.size(); ++i) ground[i] = penumbra::test::groundDepth(eye, dirs[i], 1e9);
+    penumbra::test::setDefaultState();
+    const std::vector<float> reference = renderShafts(scene, airlight, eye, target, w, h, ground, nullptr);
+    penumbra::test::setHostileState();
+    glBlendFuncSeparatei(0, GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ZERO);
+    glBlendEquationSeparatei(0, GL_FUNC_SUBTRACT, GL_MAX);
+    glUseProgram(0);  // the last render's programs died with its renderer: not the engine's to get back
+    const std::vector<double> before = penumbra::test::rasterStateSnapshot();
+    std::vector<float> hostile;
+    {
+        penumbra::gl::StateSave saved;  // and the engine gets all of it back
+        hostile = renderShafts(scene, airlight, eye, target, w, h, ground, nullptr);
+    }
+    {
+        const std::vector<double> after = penumbra::test::rasterStateSnapshot();
+        REQUIRE(after.size() == before.size());
+        for (size_t i = 0; i < before.size(); ++i) {
+            CAPTURE(i);
+            CHECK(after[i] == before[i]);
+        }
+        const GLenum error = glGetError();
+        CHECK(error == GL_NO_ERROR);
+    }
+    penumbra::test::setDefaultState();
+    glBlendFuncSeparatei(0, GL_ONE, GL_ZERO, GL_ONE, GL_ZERO);
+    glBlendEquationSeparatei(0, GL_FUNC_ADD, GL_FUNC_ADD);
+    REQUIRE(reference.size() == hostile.size());
+    size_t differing = 0, lit = 0;
+    for (size_t i = 0; i < reference.size(); ++i) {
+        differing += std::memcmp(&reference[i], &hostile[i], sizeof(float)) != 0;
+        lit += reference[i] > 0.0f;
+    }
+    MESSAGE(differing, " of ", reference.size(), " pixels differ under the engine's state");
+    CHECK(lit > 0);
+    CHECK(differing == 0);
 }
 
 TEST_CASE("GPU ray-march baseline == its CPU twin (reference::rayMarchExact, nearest texel), and converges to the volume") {

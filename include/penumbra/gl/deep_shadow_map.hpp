@@ -21,8 +21,10 @@
 //             count, scan, write. All decisions stay on the GPU.
 //   state:    build() binds its programs, its vertex array, its attachment-less framebuffer, the
 //             viewport R x R, uniform bindings 0-1, storage bindings 0-7 and, with an opacity
-//             texture, texture unit PENUMBRA_DSM_OPACITY_TEXTURE_UNIT (0), and disables depth
-//             test, culling and rasterizer discard; it restores none of these (the integrator
+//             texture, texture unit PENUMBRA_DSM_OPACITY_TEXTURE_UNIT (0), disables depth
+//             test, culling and rasterizer discard and sets gl::setPassRasterState's rasterizer
+//             state (scissor off, polygon fill, clip distances off, clip control lower-left /
+//             -1..1, no primitive restart, ...); it restores none of these (the integrator
 //             rebinds what it uses next). It never queries GL state, never reads back and never
 //             allocates: everything is sized at construction from the capacities.
 //   limits:   llvmpipe stops an invocation's loops after 65 535 iterations in total; the merge of a
@@ -231,6 +233,7 @@ public:
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
+        gl::setPassRasterState();
         const void* first_index = reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset));
         timers_.begin(0);
         glUseProgram(raster_count_.id());

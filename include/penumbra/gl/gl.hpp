@@ -57,6 +57,29 @@ inline GLint getInteger(GLenum name, GLuint index) {
     return value;
 }
 
+/// The rasterizer state every penumbra draw pass relies on, set before it draws into its own
+/// framebuffer whatever the engine left behind (a UI pass's scissor box, a wireframe debug
+/// toggle, user clip planes, D3D-style clip control, primitive restart, a narrowed depth range):
+/// scissor test off, polygon mode GL_FILL, GL_CLIP_DISTANCE0..7 off (GL 4.5 guarantees 8), clip
+/// control (GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE), depth range [0, 1], polygon smoothing and
+/// polygon offset (fill) off, both primitive restarts off, front face GL_CCW, provoking vertex
+/// GL_LAST_VERTEX_CONVENTION. Changed, not restored (each block's "GL state" lists it); a dozen
+/// state calls, no query. tests/engine_state_test.cpp runs every drawing block under the opposite
+/// state and requires the same results bit for bit.
+inline void setPassRasterState() {
+    glDisable(GL_SCISSOR_TEST);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    for (GLenum i = 0; i < 8; ++i) glDisable(GL_CLIP_DISTANCE0 + i);
+    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+    glDepthRange(0.0, 1.0);
+    glDisable(GL_POLYGON_SMOOTH);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glDisable(GL_PRIMITIVE_RESTART);
+    glDisable(GL_PRIMITIVE_RESTART_FIXED_INDEX);
+    glFrontFace(GL_CCW);
+    glProvokingVertex(GL_LAST_VERTEX_CONVENTION);
+}
+
 }  // namespace penumbra::gl
 
 #endif

@@ -240,8 +240,11 @@ struct LightVolumeView {
 ///            engine's lit image (W x H, GL_RGBA32F or GL_RGBA16F, bound as an image).
 ///   state:   render() binds its framebuffer, viewport, programs, an empty vertex array, the draw-
 ///            indirect buffer, uniform binding 2, storage bindings 0 and 3, texture units 1-3 (with
-///            samplers) and image unit 0; enables blending (ONE, ONE), depth clamp, sets front faces
-///            counter-clockwise, disables depth test and culling; restores none of them. Ends with
+///            samplers) and image unit 0; enables blending (ONE, ONE) and the colour writes of draw
+///            buffer 0, depth clamp, sets gl::setPassRasterState's rasterizer state (before the
+///            clear, which obeys the scissor test: scissor off, polygon fill, clip distances off,
+///            clip control lower-left / -1..1 so gl_FrontFacing keeps its sign, front faces
+///            counter-clockwise, ...), disables depth test and culling; restores none of them. Ends with
 ///            GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT.
 class LightVolumeRenderer {
 public:
@@ -309,13 +312,14 @@ public:
         upload(view, tessellator.setup().resolution, 0);
         glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
         glViewport(0, 0, GLsizei(width_), GLsizei(height_));
+        setPassRasterState();  // before the clear too: it obeys the scissor test and the colour mask
+        glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
         const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
         glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, zero);
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
         glEnable(GL_DEPTH_CLAMP);
-        glFrontFace(GL_CCW);
         glEnablei(GL_BLEND, 0);
         glBlendEquationi(0, GL_FUNC_ADD);
         glBlendFunci(0, GL_ONE, GL_ONE);

@@ -25,7 +25,9 @@
 //             overflowing pixel is flagged: safe, merely multi-sampled).
 //   state:    run() binds its programs, vertex array, framebuffer, viewport (grid size), uniform
 //             bindings 0-1 and storage bindings 0-7 and what the scanner binds; disables depth test,
-//             culling and rasterizer discard; restores none of them. Ends with
+//             culling and rasterizer discard; sets gl::setPassRasterState's rasterizer state
+//             (scissor off, polygon fill, clip distances off, clip control lower-left / -1..1, no
+//             primitive restart, ...); restores none of them. Ends with
 //             GL_SHADER_STORAGE_BARRIER_BIT.
 #ifndef PENUMBRA_GL_SHADOW_EDGE_STENCIL_HPP
 #define PENUMBRA_GL_SHADOW_EDGE_STENCIL_HPP
@@ -298,6 +300,7 @@ private:
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
+        gl::setPassRasterState();
         glUseProgram(program.id());
         glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(casters.index_count), GL_UNSIGNED_INT,
                        reinterpret_cast<const void*>(static_cast<uintptr_t>(casters.indices.offset)));

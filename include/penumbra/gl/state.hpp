@@ -1,6 +1,11 @@
 // penumbra — an opt-in GL state snapshot for integrators who want every binding a block touches
-// put back. Blocks themselves never restore state (the integrator owns it, STYLE.md habit 16);
-// each executor's header lists exactly what it changes. StateSave queries GL (glGet*) when
+// put back: program, framebuffers, vertex array, viewport, buffer bindings (generic, indirect, the
+// first 16 indexed SSBO / UBO ones), texture and sampler units 0-7, image units 0-7, the enables
+// and rasterizer state blocks set (gl::setPassRasterState: scissor test, polygon mode, clip
+// distances 0-7, clip control, depth range, smoothing, offset, primitive restart, front face,
+// provoking vertex) and draw buffer 0's blending and colour mask. Blocks themselves never restore
+// state (the integrator owns it, STYLE.md habit 16); each executor's header lists exactly what it
+// changes. StateSave queries GL (glGet*) when
 // constructed, so it belongs around calls where that cost is acceptable, not in tight frames on
 // drivers where queries stall.
 //
@@ -22,6 +27,7 @@ public:
     /// Indexed bindings saved per target (GL 4.5 guarantees at least 8 SSBO and 36 UBO bindings).
     static constexpr int kBindings = 16;
     static constexpr int kTextureUnits = 8;
+    static constexpr int kImageUnits = 8;  ///< GL 4.5 guarantees 8 image units
 
     StateSave() {
         glGetIntegerv(GL_CURRENT_PROGRAM, &program_);
@@ -45,7 +51,29 @@ public:
             glGetIntegerv(GL_SAMPLER_BINDING, &samplers_[u]);
         }
         glActiveTexture(static_cast<GLenum>(active_texture_));
+        for (int u = 0; u < kImageUnits; ++u) {
+            ImageUnit& image = images_[u];
+            const GLuint i = static_cast<GLuint>(u);
+            glGetIntegeri_v(GL_IMAGE_BINDING_NAME, i, &image.texture);
+            glGetIntegeri_v(GL_IMAGE_BINDING_LEVEL, i, &image.level);
+            glGetIntegeri_v(GL_IMAGE_BINDING_LAYERED, i, &image.layered);
+            glGetIntegeri_v(GL_IMAGE_BINDING_LAYER, i, &image.layer);
+            glGetIntegeri_v(GL_IMAGE_BINDING_ACCESS, i, &image.access);
+            glGetIntegeri_v(GL_IMAGE_BINDING_FORMAT, i, &image.format);
+        }
         for (size_t e = 0; e < kEnables.size(); ++e) enabled_[e] = glIsEnabled(kEnables[e]);
+        // Rasterizer state (gl::setPassRasterState) and draw buffer 0's blending and colour mask.
+        glGetIntegerv(GL_POLYGON_MODE, polygon_mode_.data());
+        glGetIntegerv(GL_CLIP_ORIGIN, &clip_origin_);
+        glGetIntegerv(GL_CLIP_DEPTH_MODE, &clip_depth_mode_);
+        glGetDoublev(GL_DEPTH_RANGE, depth_range_.data());
+        glGetIntegerv(GL_FRONT_FACE, &front_face_);
+        glGetIntegerv(GL_PROVOKING_VERTEX, &provoking_vertex_);
+        blend0_ = glIsEnabledi(GL_BLEND, 0);
+        const GLenum blend_names[6] = {GL_BLEND_SRC_RGB, GL_BLEND_DST_RGB, GL_BLEND_SRC_ALPHA, GL_BLEND_DST_ALPHA,
+                                       GL_BLEND_EQUATION_RGB, GL_BLEND_EQUATION_ALPHA};
+        for (int b = 0; b < 6; ++b) glGetIntegeri_v(blend_names[b], 0, &blend_state_[b]);
+        glGetBooleani_v(GL_COLOR_WRITEMASK, 0, color_mask0_.data());
     }
     StateSave(const StateSave&) = delete;
     StateSave& operator=(const StateSave&) = delete;
@@ -68,10 +96,27 @@ public:
             glBindSampler(static_cast<GLuint>(u), static_cast<GLuint>(samplers_[u]));
         }
         glActiveTexture(static_cast<GLenum>(active_texture_));
+        for (int u = 0; u < kImageUnits; ++u) {
+            const ImageUnit& image = images_[u];
+            glBindImageTexture(static_cast<GLuint>(u), static_cast<GLuint>(image.texture), image.level,
+                               image.layered ? GL_TRUE : GL_FALSE, image.layer, static_cast<GLenum>(image.access),
+                               static_cast<GLenum>(image.format));
+        }
         for (size_t e = 0; e < kEnables.size(); ++e) {
             if (enabled_[e]) glEnable(kEnables[e]);
             else glDisable(kEnables[e]);
         }
+        glPolygonMode(GL_FRONT_AND_BACK, static_cast<GLenum>(polygon_mode_[0]));
+        glClipControl(static_cast<GLenum>(clip_origin_), static_cast<GLenum>(clip_depth_mode_));
+        glDepthRange(depth_range_[0], depth_range_[1]);
+        glFrontFace(static_cast<GLenum>(front_face_));
+        glProvokingVertex(static_cast<GLenum>(provoking_vertex_));
+        if (blend0_) glEnablei(GL_BLEND, 0);
+        else glDisablei(GL_BLEND, 0);
+        glBlendFuncSeparatei(0, static_cast<GLenum>(blend_state_[0]), static_cast<GLenum>(blend_state_[1]),
+                             static_cast<GLenum>(blend_state_[2]), static_cast<GLenum>(blend_state_[3]));
+        glBlendEquationSeparatei(0, static_cast<GLenum>(blend_state_[4]), static_cast<GLenum>(blend_state_[5]));
+        glColorMaski(0, color_mask0_[0], color_mask0_[1], color_mask0_[2], color_mask0_[3]);
     }
 
 private:
@@ -79,14 +124,29 @@ private:
         GLint buffer = 0;
         GLint64 start = 0, size = 0;
     };
-    static constexpr std::array<GLenum, 6> kEnables = {GL_DEPTH_TEST, GL_CULL_FACE, GL_DEPTH_CLAMP,
-                                                       GL_RASTERIZER_DISCARD, GL_STENCIL_TEST, GL_BLEND};
+    struct ImageUnit {
+        GLint texture = 0, level = 0, layered = 0, layer = 0, access = GL_READ_ONLY, format = GL_R8;
+    };
+    static constexpr std::array<GLenum, 19> kEnables = {
+        GL_DEPTH_TEST,       GL_CULL_FACE,          GL_DEPTH_CLAMP,         GL_RASTERIZER_DISCARD,
+        GL_STENCIL_TEST,     GL_SCISSOR_TEST,       GL_POLYGON_SMOOTH,      GL_POLYGON_OFFSET_FILL,
+        GL_PRIMITIVE_RESTART, GL_PRIMITIVE_RESTART_FIXED_INDEX, GL_CLIP_DISTANCE0, GL_CLIP_DISTANCE0 + 1,
+        GL_CLIP_DISTANCE0 + 2, GL_CLIP_DISTANCE0 + 3, GL_CLIP_DISTANCE0 + 4, GL_CLIP_DISTANCE0 + 5,
+        GL_CLIP_DISTANCE0 + 6, GL_CLIP_DISTANCE0 + 7, GL_BLEND};  // GL_BLEND last: draw buffer 0 is redone below
     GLint program_ = 0, draw_framebuffer_ = 0, read_framebuffer_ = 0, vertex_array_ = 0;
     GLint generic_ssbo_ = 0, generic_ubo_ = 0, draw_indirect_ = 0, dispatch_indirect_ = 0, active_texture_ = 0;
     std::array<GLint, 4> viewport_{};
     std::array<Indexed, kBindings> ssbo_{}, ubo_{};
     std::array<GLint, kTextureUnits> textures_{}, samplers_{};
     std::array<GLboolean, kEnables.size()> enabled_{};
+    std::array<ImageUnit, kImageUnits> images_{};
+    std::array<GLint, 2> polygon_mode_{GL_FILL, GL_FILL};
+    GLint clip_origin_ = GL_LOWER_LEFT, clip_depth_mode_ = GL_NEGATIVE_ONE_TO_ONE;
+    std::array<GLdouble, 2> depth_range_{0.0, 1.0};
+    GLint front_face_ = GL_CCW, provoking_vertex_ = GL_LAST_VERTEX_CONVENTION;
+    GLboolean blend0_ = GL_FALSE;
+    std::array<GLint, 6> blend_state_{};
+    std::array<GLboolean, 4> color_mask0_{GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE};
 
     static void save(GLenum binding, GLenum start, GLenum size, int i, Indexed& out) {
         glGetIntegeri_v(binding, static_cast<GLuint>(i), &out.buffer);

@@ -49,7 +49,10 @@
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
 // (off), GL_DEPTH_CLAMP (left on: casters before the near / beyond the far plane still cast), the
-// vertex-array binding (its own empty VAO during the predicate pass and the spill passes; then
+// rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip distances
+// off, clip control lower-left / -1..1, depth range [0, 1], no smoothing, offset or primitive
+// restart, CCW, last provoking vertex: whatever the engine left there cannot clip or thin the
+// predicate and light passes), the vertex-array binding (its own empty VAO during the predicate pass and the spill passes; then
 // whatever your callback binds, or, two-pass, the empty VAO again), the uniform-buffer bindings of
 // AfhBindings and 0 (conservative parameters), SSBO bindings of AfhBindings, the
 // GL_DRAW_INDIRECT_BUFFER binding (two-pass: the spill buffer), and whatever the sample-list
@@ -362,6 +365,7 @@ private:
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
         glEnable(GL_DEPTH_CLAMP);  // casters nearer than the near plane or beyond the far plane still cast
+        gl::setPassRasterState();
         // (3) Which list blocks does the longest list need? One point per block, on the GPU.
         blocks_.use();
         glBindVertexArray(empty_vao_.id());

@@ -58,7 +58,9 @@
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
-// (off), the vertex-array binding (its own empty VAO during the predicate pass; then whatever
+// (off), the rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip
+// distances off, clip control lower-left / -1..1, ...: the engine's leftovers cannot clip the
+// passes), the vertex-array binding (its own empty VAO during the predicate pass; then whatever
 // your callback binds), the uniform-buffer bindings and SSBO bindings of SbsBindings, and
 // whatever the sample-list builder and scanner bind. Your callback must leave the light pass's
 // SSBO bindings alone. Ends with GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
@@ -447,6 +449,7 @@ private:
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
+        gl::setPassRasterState();
         if (!timers_.empty()) timers_[1].begin();
         // (2) Which list blocks does the longest list need? One point per block, on the GPU.
         blocks_.use();
