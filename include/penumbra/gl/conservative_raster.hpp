@@ -10,7 +10,8 @@
 //             and the params block bound at your params binding.
 //   per frame (no allocation, no query, no read-back, no exception):
 //             beginConservativeSpill(setup, spill)   before the direct draw: writes setup.spill.reset
-//                                                    into the header (glNamedBufferSubData, 32 bytes)
+//                                                    into the header (glMemoryBarrier(BUFFER_UPDATE),
+//                                                    glNamedBufferSubData, 32 bytes)
 //                                                    and binds the range as SSBO `bindings.spill`;
 //             ... your direct draw (glDrawArrays/Elements with the direct program) ...
 //             drawConservativeSpill(setup, spill)    with the spill program current and any vertex
@@ -74,6 +75,9 @@ inline Status beginConservativeSpill(const ConservativeRasterSetup& setup, const
     const Status status = detail::conservativeSpillStatus(setup, spill);
     PENUMBRA_ASSERT(status == Status::Ok);
     if (status != Status::Ok) return status;
+    // The last spill pass's shaders appended to this header: the reset is ordered after those
+    // writes only by this bit (GL 4.5 §7.13.2).
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     glNamedBufferSubData(spill.buffer, static_cast<GLintptr>(spill.offset + setup.spill.indirect_offset),
                          sizeof setup.spill.reset, &setup.spill.reset);
     bindRange(GL_SHADER_STORAGE_BUFFER, bindings.spill, spill.sub(0, setup.spill.buffer_bytes));

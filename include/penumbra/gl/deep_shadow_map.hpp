@@ -209,6 +209,9 @@ public:
             glNamedBufferSubData(params_.id(), level * ubo_stride_, sizeof(DsmParams), &p);
         }
         const uint32_t zero = 0;
+        // The last build's shaders wrote these buffers: a clear is ordered after those writes only
+        // by this bit (GL 4.5 §7.13.2); llvmpipe is coherent anyway, real GPUs need not be.
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         glClearNamedBufferData(counts_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glClearNamedBufferData(cursor_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glClearNamedBufferData(status_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);

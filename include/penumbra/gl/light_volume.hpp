@@ -138,6 +138,9 @@ public:
         const uint32_t r = setup_.resolution, levels = setup_.levels;
         const uint32_t zero = 0;
         timers_.begin(0);
+        // The last tessellation's shaders wrote the flags: a clear is ordered after those writes
+        // only by this bit (GL 4.5 §7.13.2).
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         glClearNamedBufferData(flags_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glBindTextureUnit(PENUMBRA_LV_DEPTH_UNIT, depth_texture);
         glBindSampler(PENUMBRA_LV_DEPTH_UNIT, sampler_);

@@ -185,6 +185,9 @@ public:
         params_staging_ = aaParams(view, light, options_, pattern_, stencil_options_, capacity_, PENUMBRA_AA_MODE_EDGE, chebyshev_);
         glNamedBufferSubData(params_.id(), 0, sizeof(AaParams), &params_staging_);
         const uint32_t zero = 0;
+        // The last run's shaders wrote these buffers (and the Chebyshev maps cleared below): a
+        // clear is ordered after those writes only by this bit (GL 4.5 §7.13.2).
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         glClearNamedBufferData(counts_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glClearNamedBufferData(cursor_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glClearNamedBufferData(status_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
