@@ -1,6 +1,8 @@
 // The per-frame contract (issue 7; docs/design.md, convention 2), recorded: after warm-up, every GL
 // call made inside Scanner::scan, SampleListBuilder::build, AliasFreeHardShadows::run (buffer
-// and depth input, with the GPU fit and statistics on) and LightLutGenerator::generate is logged through glad's debug loader
+// and depth input, with the GPU fit and statistics on), LightLutGenerator::generate,
+// DeepShadowMapBuilder::build and ShadowEdgeStencil::run / writeSampleBuffer / resolve (the soft
+// pipeline and the light volume have theirs in their own tests) is logged through glad's debug loader
 // (support/gl_audit.hpp) and the heap is counted (support/alloc_counter.hpp): 0 queries (glGet*,
 // glIs*, glCheck*Status), 0 glGetError, 0 read-backs, 0 maps, 0 glFinish / fence waits, 0 heap
 // allocations. A queued engine error survives each call. The same holds for the conservative
@@ -10,10 +12,12 @@
 #include "support/gl_test_support.hpp"
 
 #include <penumbra/gl/conservative_raster.hpp>
+#include <penumbra/gl/deep_shadow_map.hpp>
 #include <penumbra/gl/light_lut.hpp>
 #include <penumbra/gl/pipelines/alias_free_hard.hpp>
 #include <penumbra/gl/sample_lists.hpp>
 #include <penumbra/gl/scan.hpp>
+#include <penumbra/gl/shadow_edge_stencil.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/scene.hpp>
 
@@ -219,5 +223,92 @@ TEST_CASE("LightLutGenerator::generate: seed and certified, one and several disp
             CHECK(misuse.calls == 0);
             CHECK(misuse.allocations == 0);
         }
+    }
+}
+
+TEST_CASE("DeepShadowMapBuilder::build: grey and per-triangle opacity, a medium, the whole mip chain") {
+    context();
+    World w;
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+    for (const auto& mesh : w.scene.meshes) {
+        if (mesh.name == "ground") continue;
+        const uint32_t base = static_cast<uint32_t>(positions.size());
+        positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
+        for (uint32_t i : mesh.indices) indices.push_back(base + i);
+    }
+    penumbra::DsmOptions o;
+    o.resolution = 32;
+    o.samples = 4;
+    o.levels = 0;
+    const penumbra::DsmSetup setup = penumbra::deepShadowMapSetup(o);
+    penumbra::gl::DeepShadowMapBuilder builder(setup);
+    auto position_buffer = penumbra::gl::Buffer::fromVector(positions);
+    auto index_buffer = penumbra::gl::Buffer::fromVector(indices);
+    std::vector<glm::vec4> per_triangle(indices.size() / 3, glm::vec4(0.4f, 0.5f, 0.6f, 0.0f));
+    auto triangle_buffer = penumbra::gl::Buffer::fromVector(per_triangle);
+    penumbra::gl::DsmCasterBuffers casters;
+    casters.positions = range(position_buffer);
+    casters.indices = range(index_buffer);
+    casters.index_count = static_cast<uint32_t>(indices.size());
+    penumbra::DsmLight light;
+    light.view = glm::lookAt(w.scene.light.position, glm::vec3(0.0f), glm::vec3(0.0f, 0.0f, 1.0f));
+    light.projection = glm::perspective(glm::radians(70.0f), 1.0f, 0.5f, 20.0f);
+    penumbra::DsmOpacity grey;
+    grey.mesh = glm::vec3(0.5f);
+    checkContract(record([&] {
+                      builder.build(light, grey, casters);
+                      return Status::Ok;
+                  }),
+                  "DeepShadowMapBuilder::build, grey opacity, 32^2, S = 4, mips");
+    penumbra::gl::DsmCasterBuffers coloured = casters;
+    coloured.triangle_opacity = range(triangle_buffer);
+    penumbra::DsmMedium medium;
+    medium.lo = glm::vec3(-1.0f);
+    medium.hi = glm::vec3(1.0f);
+    medium.sigma_t = 0.5f;
+    penumbra::checkDsmMedium(medium);
+    checkContract(record([&] {
+                      builder.build(light, grey, coloured, medium);
+                      return Status::Ok;
+                  }),
+                  "DeepShadowMapBuilder::build, per-triangle opacity, medium");
+    queueEngineError();
+    builder.build(light, grey, casters);
+    CHECK(glGetError() == GL_INVALID_ENUM);
+}
+
+TEST_CASE("ShadowEdgeStencil: run (provable and Chebyshev), writeSampleBuffer and resolve") {
+    context();
+    World w;
+    penumbra::AliasFreeHardOptions options;
+    options.grid_width = 96;
+    options.grid_height = 72;
+    penumbra::AaPatternOptions pattern;
+    pattern.samples = 4;
+    penumbra::gl::AaCasterBuffers casters;
+    casters.stride = 24;  // GpuScene interleaves position and normal
+    casters.index_count = w.gpu.indexCount();
+    casters.positions = {w.gpu.vertexBuffer(), 0, 24ull * w.gpu.positions().size()};
+    casters.indices = {w.gpu.indexBuffer(), 0, 4ull * casters.index_count};
+    const penumbra::BufferRange centres = range(w.gbuffer.positionBuffer()), normals = range(w.gbuffer.faceBuffer());
+    for (const auto kind : {penumbra::gl::AaStencilKind::Provable, penumbra::gl::AaStencilKind::Chebyshev}) {
+        penumbra::gl::ShadowEdgeStencil stencil(96, 72, options, pattern, {}, 1u << 20, penumbra::ShaderLibrary::embedded(),
+                                                kind);
+        const std::string name = kind == penumbra::gl::AaStencilKind::Provable ? "provable" : "Chebyshev";
+        checkContract(record([&] { return stencil.run(centres, normals, w.view, w.light, casters); }),
+                      "ShadowEdgeStencil::run, " + name);
+        penumbra::gl::Buffer positions(stencil.sampleBufferBytes()), sample_normals(stencil.sampleBufferBytes());
+        penumbra::gl::Buffer states(4ull * stencil.sampleCount(penumbra::AaMode::Full)), visible(4ull * w.samples());
+        for (const auto mode : {penumbra::AaMode::Edge, penumbra::AaMode::Full}) {
+            const std::string m = mode == penumbra::AaMode::Edge ? "edge" : "full";
+            checkContract(record([&] { return stencil.writeSampleBuffer(mode, range(positions), range(sample_normals), 512); }),
+                          "ShadowEdgeStencil::writeSampleBuffer, " + name + ", " + m);
+            checkContract(record([&] { return stencil.resolve(mode, range(states), range(visible), 512); }),
+                          "ShadowEdgeStencil::resolve, " + name + ", " + m);
+        }
+        queueEngineError();
+        stencil.run(centres, normals, w.view, w.light, casters);
+        CHECK(glGetError() == GL_INVALID_ENUM);
     }
 }
