@@ -378,6 +378,19 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                 MESSAGE(name, " ", input, " light (", position.x, ", ", position.y, ", ", position.z, "): ",
                         c.tested, " samples, ", c.shadowed, " shadowed, mismatched ", c.mismatched, ", ties ", c.ties,
                         " (back-facing ", c.back_facing, ", untested ", c.untested, "), spilled ", frame.spilled);
+                if (c.mismatched != 0) {
+                    // Seen once on an NVIDIA H200 (depth input, nothing shadowed, nothing spilled):
+                    // tell an empty list build (accepted 0) from skipped light-pass blocks (passes
+                    // 0 with samples listed), and whether the same frame run again reproduces it.
+                    const auto again = runPipeline(pipeline, f, light, v);
+                    const penumbra::AliasFreeHardFrame rerun = pipeline.readFrame();
+                    size_t differing = 0;
+                    for (size_t i = 0; i < states.size(); ++i) differing += states[i] != again[i];
+                    MESSAGE("mismatched frame: accepted ", frame.statistics.accepted, ", max list length ",
+                            frame.statistics.max_list_length, ", passes ", frame.passes, ", fragments ", frame.fragments,
+                            "; the same frame again: accepted ", rerun.statistics.accepted, ", passes ", rerun.passes,
+                            ", spilled ", rerun.spilled, ", ", differing, " states differ from the first run");
+                }
                 CHECK(c.tested > size * height / 8);
                 CHECK(c.untested == 0);
                 CHECK(c.mismatched == 0);
