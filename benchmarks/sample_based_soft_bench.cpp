@@ -48,7 +48,9 @@
 //
 // Entries:
 //   BM_SoftShadows/<N>/<mode>        N = 128, 256, 512, 1024; mode exact and lut (brute at 128).
-//                                    Work: pairs, fragments, passes, exact_tests, uncertain_bits
+//                                    Work: pairs, pairs_front (decided at once: the whole light
+//                                    in front of one plane, no table read), fragments, passes,
+//                                    exact_tests, uncertain_bits
 //                                    (fraction of the pairs' bits the certified LUT left to the
 //                                    exact test), tests_per_sample (pairs / surface samples),
 //                                    overflow, max_list_length.
@@ -424,6 +426,7 @@ void setWork(benchmark::State& state, const View& v, const LightConfig& c, const
     const penumbra::SampleBasedSoftFrame f = counting.pipeline.readFrame();
     const double n = double(c.sets.count());
     state.counters["pairs"] = double(f.pairs);
+    state.counters["pairs_front"] = double(f.pairs_front);
     state.counters["fragments"] = double(f.fragments);
     state.counters["passes"] = double(f.passes);
     state.counters["exact_tests"] = double(f.exact_tests);

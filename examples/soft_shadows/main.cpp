@@ -2024,6 +2024,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"pairs_cut", frame.pairs_cut},
                      {"pairs_hard", frame.pairs_hard},
                      {"pairs_recovered", frame.pairs_recovered},
+                     {"pairs_front", frame.pairs_front},
                      {"tests_skipped", frame.pairs_cut + frame.pairs_hard},
                      {"penumbra_texels", penumbra_texels}};
         j["skips"] = args.skip_list;

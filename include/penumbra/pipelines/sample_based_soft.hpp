@@ -251,6 +251,10 @@ struct SampleBasedSoftCpuResult {
     /// SoftSkips::closed_casters: (receiver, culled caster) pairs evaluated after all, the receiver
     /// lying within the oracle's coplanar reach of a kept closed triangle (then in pairs or pairs_cut).
     uint64_t pairs_recovered = 0;
+    /// Lut and Exact: pairs decided at once because the whole light lies in front of one of the
+    /// pair's planes (a trivial LUT cell; in Exact a proven plane): T blocks nothing for the
+    /// receiver, no table is read (in `pairs`, not in `planes`).
+    uint64_t pairs_front = 0;
 
     bool blocked(size_t r, uint32_t s) const { return (masks[r * words_per_receiver + s / 32] >> (s % 32)) & 1u; }
     uint32_t blockedCount(size_t r) const {
@@ -556,6 +560,16 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 result.uncertain_bits += n;
                 for (uint32_t s = 0; s < n; ++s)
                     if (decide(s)) out[s / 32] |= 1u << (s % 32);
+                continue;
+            }
+            // The whole light in front of one plane (trivial cell: no sample behind it in any table;
+            // in Exact only a proven plane's cell counts): every table would AND in a zero mask and
+            // leave no bit uncertain, so T blocks nothing for p. The GPU light pass does the same.
+            bool front = false;
+            for (const soft::LocalPlane& plane : planes)
+                front = front || ((mode == SoftMode::Lut || plane.proven) && lightLutLocate(lut->params, plane.plane).trivial < 0);
+            if (front) {
+                ++result.pairs_front;
                 continue;
             }
             for (uint32_t block = 0; block < tables; ++block) {

@@ -188,7 +188,7 @@ void main() {
     double normal_length = -1.0LF;
     precise double light_gap = 0.0LF;
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u,
-         hard = 0u, recovered = 0u;
+         hard = 0u, recovered = 0u, front = 0u;
     // SoftSkips::closed_casters (the twin's two sweeps): the first pass over a closed draw flags the
     // samples within the oracle's coplanar reach of a kept triangle and not provably outside it (and
     // their texel, after the samples' flags); the second pass gives only those the culled triangles.
@@ -320,6 +320,15 @@ void main() {
         // once per 128-sample block (N = 1024: 4 locations instead of 32).
         PenumbraLutCell cells[4];
         for (int i = 0; i < 4; ++i) cells[i] = penumbraLutLocate(P.lut, vec4(planes[i].plane));
+        // The whole light in front of one plane (a trivial cell: no sample behind it, in every
+        // table; in Exact that plane must be proven, else its cell is not trusted): T blocks
+        // nothing for p. Every table would AND in a zero mask and leave no bit uncertain, so the
+        // pair ends here, with the same bits, before 4 x tables lookups (the CPU twin likewise).
+        if ((cells[0].trivial < 0 && (!exact || planes[0].proven)) || (cells[1].trivial < 0 && (!exact || planes[1].proven)) ||
+            (cells[2].trivial < 0 && (!exact || planes[2].proven)) || (cells[3].trivial < 0 && (!exact || planes[3].proven))) {
+            ++front;
+            continue;
+        }
         for (uint block = 0u; block < tables; ++block) {
             const uint table = set * tables + block;
             if (mode == PENUMBRA_SBS_MODE_LUT) {
@@ -373,5 +382,6 @@ void main() {
     if (cut != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_CUT], cut);
     if (hard != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_HARD], hard);
     if (recovered != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_RECOVERED], recovered);
+    if (front != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_FRONT], front);
 #endif
 }

@@ -94,6 +94,7 @@
 #define PENUMBRA_SBS_WORK_PAIRS_CUT 10         // pairs whose receiver and light lie on one side of the caster
 #define PENUMBRA_SBS_WORK_PAIRS_HARD 11        // pairs outside every silhouette's region: one test from the centre
 #define PENUMBRA_SBS_WORK_PAIRS_RECOVERED 12   // culled casters' pairs evaluated after all (near receivers)
+#define PENUMBRA_SBS_WORK_PAIRS_FRONT 13       // pairs with the whole light in front of one (proven) plane: no table read
 #define PENUMBRA_SBS_WORK_WORDS 16
 
 // Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.

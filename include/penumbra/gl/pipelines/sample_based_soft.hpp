@@ -128,6 +128,9 @@ struct SampleBasedSoftFrame {
     /// SoftSkips::closed_casters: culled triangles' pairs evaluated after all in the second pass, the
     /// sample lying within the oracle's coplanar reach of a kept closed triangle.
     uint64_t pairs_recovered = 0;
+    /// Pairs decided at once because the whole light lies in front of one (in Exact: proven) plane
+    /// of the pair: no LUT table read (Lut and Exact).
+    uint64_t pairs_front = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -316,6 +319,7 @@ public:
         f.pairs_cut = w[PENUMBRA_SBS_WORK_PAIRS_CUT];
         f.pairs_hard = w[PENUMBRA_SBS_WORK_PAIRS_HARD];
         f.pairs_recovered = w[PENUMBRA_SBS_WORK_PAIRS_RECOVERED];
+        f.pairs_front = w[PENUMBRA_SBS_WORK_PAIRS_FRONT];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
