@@ -240,8 +240,7 @@ TEST_CASE("ShadowEdgeStencil::run: the engine's raster state changes no flag (pr
             REQUIRE(stencil.run(whole(w.gbuffer.positionBuffer()), whole(w.gbuffer.faceBuffer()), w.view, w.light,
                                 casters) == Status::Ok);
             std::vector<uint32_t> words = stencil.readStencil();
-            const std::vector<uint32_t> status = asWords(std::vector<uint32_t>(stencil.readStatus().begin(),
-                                                                               stencil.readStatus().end()));
+            const auto status = stencil.readStatus();  // one array: begin() and end() of the same read
             words.insert(words.end(), status.begin(), status.end());
             return words;
         });
