@@ -9,6 +9,7 @@
 // driver: both runs are the same driver's.
 #include "support/engine_state.hpp"
 #include "support/gl_test_support.hpp"
+#include "support/gl_world.hpp"
 
 #include <penumbra/gl/deep_shadow_map.hpp>
 #include <penumbra/gl/light_volume.hpp>
@@ -63,45 +64,14 @@ std::vector<uint32_t> asWords(const std::vector<T>& values) {
     return words;
 }
 
-// A small scene, its G-buffer and a light that sees every view sample.
-struct World {
-    penumbra::scene::Scene scene;
-    penumbra::scene::GpuScene gpu;
-    penumbra::scene::GBuffer gbuffer{96, 72};
-    glm::mat4 camera{1.0f};
-    glm::vec3 lo{0.0f}, hi{0.0f};
-    penumbra::SampleListsLight light;
-    penumbra::SampleListsView view;
-    explicit World(penumbra::scene::Scene s) : scene(std::move(s)), gpu(scene) {
-        camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
-        gbuffer.render(gpu, camera);
-        const auto positions = gbuffer.positionBuffer().download<glm::vec4>();
-        const auto bounds = penumbra::viewSampleBounds(positions.data(), positions.size());
-        // Depth reconstruction moves samples by ~1e-5 relative: widen the box so every one is inside.
-        const glm::vec3 pad = 0.01f * (bounds.second - bounds.first) + glm::vec3(1e-3f);
-        lo = bounds.first - pad;
-        hi = bounds.second + pad;
-        light.light = glm::vec4(scene.light.position, 1.0f);
-        light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
-        view.width = 96;
-        view.height = 72;
-        view.inverse_view_projection = glm::inverse(camera);
-    }
-    uint32_t samples() const { return 96 * 72; }
-    penumbra::SampleBufferInput bufferInput() const { return {whole(gbuffer.positionBuffer()), whole(gbuffer.faceBuffer())}; }
-    penumbra::SampleDepthInput depthInput() const { return {gbuffer.depthTexture(), gbuffer.faceTexture(), view}; }
-};
+using World = penumbra::test::GlWorld;
 
 }  // namespace
 
 TEST_CASE("AliasFreeHardShadows: the engine's raster state changes no state (buffer and depth input)") {
     context();
     World w(penumbra::scene::builtin("torus_knot"));
-    auto draw = [&](penumbra::CasterClass cls) {
-        for (const auto& r : w.gpu.ranges()) {
-            if (r.closed == (cls == penumbra::CasterClass::Closed)) w.gpu.draw(r);
-        }
-    };
+    auto draw = [&](penumbra::CasterClass cls) { w.drawClass(cls); };
     for (int config = 0; config < 2; ++config) {
         penumbra::AliasFreeHardOptions o;
         o.grid_width = 96;
@@ -228,11 +198,7 @@ TEST_CASE("ShadowEdgeStencil::run: the engine's raster state changes no flag (pr
     options.grid_height = 72;
     penumbra::AaPatternOptions pattern;
     pattern.samples = 4;
-    penumbra::gl::AaCasterBuffers casters;
-    casters.stride = 24;  // GpuScene interleaves position and normal
-    casters.index_count = w.gpu.indexCount();
-    casters.positions = {w.gpu.vertexBuffer(), 0, 24ull * w.gpu.positions().size()};
-    casters.indices = {w.gpu.indexBuffer(), 0, 4ull * casters.index_count};
+    const penumbra::gl::AaCasterBuffers casters = w.aaCasters();
     for (const auto kind : {penumbra::gl::AaStencilKind::Provable, penumbra::gl::AaStencilKind::Chebyshev}) {
         penumbra::gl::ShadowEdgeStencil stencil(96, 72, options, pattern, {}, 1u << 22, penumbra::ShaderLibrary::embedded(),
                                                 kind);
@@ -250,11 +216,7 @@ TEST_CASE("ShadowEdgeStencil::run: the engine's raster state changes no flag (pr
 TEST_CASE("gl::StateSave puts back the engine's state around a block (hard pipeline, deep shadow map)") {
     context();
     World w(penumbra::scene::builtin("torus_knot"));
-    auto draw = [&](penumbra::CasterClass cls) {
-        for (const auto& r : w.gpu.ranges()) {
-            if (r.closed == (cls == penumbra::CasterClass::Closed)) w.gpu.draw(r);
-        }
-    };
+    auto draw = [&](penumbra::CasterClass cls) { w.drawClass(cls); };
     penumbra::AliasFreeHardOptions o;
     o.grid_width = 96;
     o.grid_height = 72;

@@ -10,6 +10,7 @@
 #include "support/alloc_counter.hpp"
 #include "support/gl_audit.hpp"
 #include "support/gl_test_support.hpp"
+#include "support/gl_world.hpp"
 
 #include <penumbra/gl/conservative_raster.hpp>
 #include <penumbra/gl/deep_shadow_map.hpp>
@@ -87,28 +88,7 @@ void queueEngineError() { glBindBuffer(0xDEADu, 0); }
 
 penumbra::BufferRange range(const penumbra::gl::Buffer& b) { return {b.id(), 0, b.size()}; }
 
-// A small scene, G-buffer and light shared by the cases.
-struct World {
-    penumbra::scene::Scene scene = penumbra::scene::builtin("torus_knot");
-    penumbra::scene::GpuScene gpu{scene};
-    penumbra::scene::GBuffer gbuffer{96, 72};
-    penumbra::SampleListsLight light;
-    penumbra::SampleListsView view;
-    World() {
-        const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
-        gbuffer.render(gpu, camera);
-        const auto positions = gbuffer.positionBuffer().download<glm::vec4>();
-        const auto [lo, hi] = penumbra::viewSampleBounds(positions.data(), positions.size());
-        light.light = glm::vec4(scene.light.position, 1.0f);
-        light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
-        view.width = 96;
-        view.height = 72;
-        view.inverse_view_projection = glm::inverse(camera);
-    }
-    uint32_t samples() const { return 96 * 72; }
-    penumbra::SampleBufferInput bufferInput() const { return {range(gbuffer.positionBuffer()), range(gbuffer.faceBuffer())}; }
-    penumbra::SampleDepthInput depthInput() const { return {gbuffer.depthTexture(), gbuffer.faceTexture(), view}; }
-};
+using World = penumbra::test::GlWorld;
 
 }  // namespace
 
@@ -162,11 +142,7 @@ TEST_CASE("SampleListBuilder::build (fit + statistics on the GPU): buffer and de
 TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast; Fixed-6 two-pass and Exact variant") {
     context();
     World w;
-    auto draw = [&](penumbra::CasterClass cls) {
-        for (const auto& r : w.gpu.ranges()) {
-            if (r.closed == (cls == penumbra::CasterClass::Closed)) w.gpu.draw(r);
-        }
-    };
+    auto draw = [&](penumbra::CasterClass cls) { w.drawClass(cls); };
     const penumbra::AliasFreeHardShadows::DrawCasters casters = draw;  // built once, outside the frame
     // Default Fixed-6 (two-pass light pass: spill reset, direct pass at max_vertices 6, indirect
     // spill draw, GPU copy of the spill figures) in exact and fast precision, and the Exact variant.
@@ -286,11 +262,7 @@ TEST_CASE("ShadowEdgeStencil: run (provable and Chebyshev), writeSampleBuffer an
     options.grid_height = 72;
     penumbra::AaPatternOptions pattern;
     pattern.samples = 4;
-    penumbra::gl::AaCasterBuffers casters;
-    casters.stride = 24;  // GpuScene interleaves position and normal
-    casters.index_count = w.gpu.indexCount();
-    casters.positions = {w.gpu.vertexBuffer(), 0, 24ull * w.gpu.positions().size()};
-    casters.indices = {w.gpu.indexBuffer(), 0, 4ull * casters.index_count};
+    const penumbra::gl::AaCasterBuffers casters = w.aaCasters();
     const penumbra::BufferRange centres = range(w.gbuffer.positionBuffer()), normals = range(w.gbuffer.faceBuffer());
     for (const auto kind : {penumbra::gl::AaStencilKind::Provable, penumbra::gl::AaStencilKind::Chebyshev}) {
         penumbra::gl::ShadowEdgeStencil stencil(96, 72, options, pattern, {}, 1u << 20, penumbra::ShaderLibrary::embedded(),
