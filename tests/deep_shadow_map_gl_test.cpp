@@ -14,6 +14,7 @@
 #include <penumbra/scene/scene.hpp>
 
 #include "support/gl_test_support.hpp"
+#include "support/gl_world.hpp"
 #include "support/test_support.hpp"
 
 #include <doctest/doctest.h>
@@ -42,21 +43,9 @@ uint32_t bits(float f) {
     return b;
 }
 
-struct Casters {
-    std::vector<glm::vec3> positions;
-    std::vector<uint32_t> indices;
-};
+using Casters = penumbra::test::SceneCasters;
 
-Casters objects(const penumbra::scene::Scene& scene) {
-    Casters c;
-    for (const auto& mesh : scene.meshes) {
-        if (mesh.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(c.positions.size());
-        c.positions.insert(c.positions.end(), mesh.positions.begin(), mesh.positions.end());
-        for (uint32_t i : mesh.indices) c.indices.push_back(base + i);
-    }
-    return c;
-}
+Casters objects(const penumbra::scene::Scene& scene) { return penumbra::test::castersWithoutGround(scene); }
 
 DsmLight lightFor(const Casters& c) {
     penumbra::scene::Bounds b;

@@ -99,34 +99,12 @@ TEST_CASE("AliasFreeHardShadows: the engine's raster state changes no state (buf
 TEST_CASE("SampleBasedSoftShadows: the engine's raster state changes no mask (depth input, exact, N = 128)") {
     context();
     World w(penumbra::scene::columns(4));
-    const glm::mat4 vp = w.light.view_projection;
-    double far_depth = 0.0;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 x((corner & 1) ? w.hi.x : w.lo.x, (corner & 2) ? w.hi.y : w.lo.y, (corner & 4) ? w.hi.z : w.lo.z);
-        far_depth = std::max(far_depth, double((vp * glm::vec4(x, 1.0f)).w));
-    }
-    penumbra::Light light;
-    light.center = glm::dvec3(w.scene.light.position);
-    light.size = glm::dvec3(double(w.scene.light.radius));
-    penumbra::LightSampleOptions so;
-    so.count = 128;
-    so.sets = 1;
-    so.seed = 7;
-    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
-    penumbra::LightLutOptions lut_options;
-    lut_options.resolution = 32;
-    lut_options.certified = true;
-    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
-    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
-    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
-    penumbra::InfluenceRegionOptions io;
-    io.grid_width = io.grid_height = 64;
-    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
-    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    const penumbra::test::GlSoftLight soft(w, 32);
+    const penumbra::BufferRange lut_table = soft.table();
     penumbra::SampleBasedSoftGpuOptions options;
     options.grid_width = options.grid_height = 64;
     options.max_list_blocks = 256;
-    penumbra::SampleBasedSoftShadows pipeline(options, sets, &lut, influence, vp);
+    penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
     pipeline.reserve(w.samples());
     const penumbra::SampleDepthInput input{w.gbuffer.depthTexture(), 0, w.view};
     pipeline.validate(input, lut_table);
@@ -141,16 +119,9 @@ TEST_CASE("SampleBasedSoftShadows: the engine's raster state changes no mask (de
 TEST_CASE("DeepShadowMapBuilder::build: the engine's raster state changes no fragment and no vertex") {
     context();
     const penumbra::scene::Scene scene = penumbra::scene::hairball(600, 3, false);
-    std::vector<glm::vec3> positions;
-    std::vector<uint32_t> indices;
+    const auto [positions, indices] = penumbra::test::castersWithoutGround(scene);
     penumbra::scene::Bounds bounds;
-    for (const auto& mesh : scene.meshes) {
-        if (mesh.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(positions.size());
-        positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
-        for (uint32_t i : mesh.indices) indices.push_back(base + i);
-        for (const auto& p : mesh.positions) bounds.extend(p);
-    }
+    for (const auto& p : positions) bounds.extend(p);
     const glm::vec3 centre = bounds.center();
     const float radius = 0.5f * glm::length(bounds.size());
     const glm::vec3 eye = centre + glm::normalize(glm::vec3(0.3f, 1.0f, 0.2f)) * (3.0f * radius);

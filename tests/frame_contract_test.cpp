@@ -205,14 +205,7 @@ TEST_CASE("LightLutGenerator::generate: seed and certified, one and several disp
 TEST_CASE("DeepShadowMapBuilder::build: grey and per-triangle opacity, a medium, the whole mip chain") {
     context();
     World w;
-    std::vector<glm::vec3> positions;
-    std::vector<uint32_t> indices;
-    for (const auto& mesh : w.scene.meshes) {
-        if (mesh.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(positions.size());
-        positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
-        for (uint32_t i : mesh.indices) indices.push_back(base + i);
-    }
+    const auto [positions, indices] = penumbra::test::castersWithoutGround(w.scene);
     penumbra::DsmOptions o;
     o.resolution = 32;
     o.samples = 4;

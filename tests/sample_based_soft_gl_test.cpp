@@ -15,6 +15,7 @@
 #include <penumbra/scene/scene.hpp>
 
 #include "support/gl_test_support.hpp"
+#include "support/gl_world.hpp"
 #include "support/test_support.hpp"
 
 #include <doctest/doctest.h>
@@ -443,46 +444,19 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
 
 TEST_CASE("GPU sample-based soft: depth-reconstructed view samples, exact == oracle on the positions the GPU used") {
     penumbra::test::context();
-    const penumbra::scene::Scene scene = penumbra::scene::columns(4);
-    const penumbra::scene::GpuScene gpu(scene);
-    penumbra::scene::GBuffer gbuffer(96, 72);
-    const glm::mat4 camera = scene.camera.projection(96.0f / 72.0f) * scene.camera.view();
-    gbuffer.render(gpu, camera);
-    const uint32_t count = 96 * 72;
-    const std::vector<glm::vec4> gpositions = gbuffer.positionBuffer().download<glm::vec4>();
-    const auto [lo0, hi0] = penumbra::viewSampleBounds(gpositions.data(), count);
-    // Depth reconstruction moves samples by ~1e-5 relative: widen the box so every one is inside.
-    const glm::vec3 pad = 0.01f * (hi0 - lo0) + glm::vec3(1e-3f);
-    const glm::vec3 lo = lo0 - pad, hi = hi0 + pad;
-    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(scene.light.position, 1.0f), lo, hi);
-    double far_depth = 0.0;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 x((corner & 1) ? hi.x : lo.x, (corner & 2) ? hi.y : lo.y, (corner & 4) ? hi.z : lo.z);
-        far_depth = std::max(far_depth, double((vp * glm::vec4(x, 1.0f)).w));
-    }
-    penumbra::Light light;
-    light.center = dvec3(scene.light.position);
-    light.size = dvec3(double(scene.light.radius));
-    penumbra::LightSampleOptions so;
-    so.count = 128;
-    so.sets = 1;
-    so.seed = 7;
-    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
-    penumbra::LightLutOptions lo_options;
-    lo_options.resolution = 64;
-    lo_options.certified = true;
-    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
-    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
-    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
-    penumbra::InfluenceRegionOptions io;
-    io.grid_width = io.grid_height = 64;
-    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
-    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
-    penumbra::SampleListsView view;
-    view.width = 96;
-    view.height = 72;
-    view.inverse_view_projection = glm::inverse(camera);
-    const penumbra::SampleDepthInput input{gbuffer.depthTexture(), 0, view};
+    // Depth reconstruction moves samples by ~1e-5 relative: GlWorld pads the light's box so every
+    // one is inside.
+    const penumbra::test::GlWorld w(penumbra::scene::columns(4));
+    const penumbra::test::GlSoftLight soft(w, 64);
+    const penumbra::scene::Scene& scene = w.scene;
+    const penumbra::scene::GpuScene& gpu = w.gpu;
+    const uint32_t count = w.samples();
+    const glm::mat4 vp = w.light.view_projection;
+    const penumbra::LightSampleSets& sets = soft.sets;
+    const penumbra::LightLutSetup& lut = soft.lut;
+    const penumbra::BufferRange lut_table = soft.table();
+    const penumbra::InfluenceRegionSetup& influence = soft.influence;
+    const penumbra::SampleDepthInput input{w.gbuffer.depthTexture(), 0, w.view};
     penumbra::SampleBasedSoftGpuOptions options;
     options.grid_width = options.grid_height = 64;
     options.max_list_blocks = 256;

@@ -6,14 +6,21 @@
 #define PENUMBRA_TESTS_SUPPORT_GL_WORLD_HPP
 
 #include "penumbra/buffer_range.hpp"
+#include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/sample_lists.hpp"
 #include "penumbra/gl/shadow_edge_stencil.hpp"
+#include "penumbra/influence_region.hpp"
+#include "penumbra/light_lut.hpp"
+#include "penumbra/light_samples.hpp"
 #include "penumbra/pipelines/caster_class.hpp"
 #include "penumbra/sample_lists.hpp"
 #include "penumbra/scene/gl_scene.hpp"
 #include "penumbra/scene/scene.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <utility>
+#include <vector>
 
 namespace penumbra::test {
 
@@ -56,6 +63,60 @@ struct GlWorld {
         c.indices = {gpu.indexBuffer(), 0, 4ull * c.index_count};
         return c;
     }
+};
+
+/// The casters of a scene without its ground, merged: what the deep-shadow-map tests render.
+struct SceneCasters {
+    std::vector<glm::vec3> positions;
+    std::vector<uint32_t> indices;
+};
+
+inline SceneCasters castersWithoutGround(const scene::Scene& scene) {
+    SceneCasters c;
+    for (const auto& mesh : scene.meshes) {
+        if (mesh.name == "ground") continue;
+        const uint32_t base = static_cast<uint32_t>(c.positions.size());
+        c.positions.insert(c.positions.end(), mesh.positions.begin(), mesh.positions.end());
+        for (uint32_t i : mesh.indices) c.indices.push_back(base + i);
+    }
+    return c;
+}
+
+/// The soft pipeline's light for a world: N samples (one set, seed 7) of the scene's spherical
+/// light, their certified LUT (generated on the CPU, uploaded) and the influence regions over a
+/// grid x grid light grid whose far plane lies beyond every corner of the world's padded box.
+struct GlSoftLight {
+    LightSampleSets sets;
+    LightLutSetup lut;
+    gl::Buffer lut_buffer;
+    InfluenceRegionSetup influence;
+
+    GlSoftLight(const GlWorld& w, uint32_t lut_resolution, uint32_t grid = 64, uint32_t n = 128) {
+        const glm::mat4 vp = w.light.view_projection;
+        double far_depth = 0.0;
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::vec3 x((corner & 1) ? w.hi.x : w.lo.x, (corner & 2) ? w.hi.y : w.lo.y, (corner & 4) ? w.hi.z : w.lo.z);
+            far_depth = std::max(far_depth, double((vp * glm::vec4(x, 1.0f)).w));
+        }
+        Light light;
+        light.center = glm::dvec3(w.scene.light.position);
+        light.size = glm::dvec3(double(w.scene.light.radius));
+        LightSampleOptions so;
+        so.count = n;
+        so.sets = 1;
+        so.seed = 7;
+        sets = makeLightSampleSets(light, so);
+        LightLutOptions lut_options;
+        lut_options.resolution = lut_resolution;
+        lut_options.certified = true;
+        lut = lightLutSetup(sets, lut_options);
+        lut_buffer = gl::Buffer::fromVector(generateLightLut(lut));
+        InfluenceRegionOptions io;
+        io.grid_width = io.grid_height = grid;
+        io.far_plane = influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+        influence = influenceRegionSetup(light, vp, io);
+    }
+    BufferRange table() const { return {lut_buffer.id(), 0, lut_buffer.size()}; }
 };
 
 }  // namespace penumbra::test
