@@ -108,12 +108,21 @@ TEST_CASE("SampleBasedSoftShadows: the engine's raster state changes no mask (de
     pipeline.reserve(w.samples());
     const penumbra::SampleDepthInput input{w.gbuffer.depthTexture(), 0, w.view};
     pipeline.validate(input, lut_table);
+    const auto draw = [&](penumbra::CasterClass c) { w.gpu.drawClass(c == penumbra::CasterClass::Closed); };
     checkUnchanged("soft, depth input", [&] {
-        REQUIRE(pipeline.run(input, lut_table, [&](penumbra::CasterClass c) {
-            w.gpu.drawClass(c == penumbra::CasterClass::Closed);
-        }) == Status::Ok);
+        REQUIRE(pipeline.run(input, lut_table, draw) == Status::Ok);
         return pipeline.readMasks();
     });
+    // gl::StateSave puts back what the pipeline changes, its stencil state included.
+    setHostileState();
+    const std::vector<double> before = penumbra::test::rasterStateSnapshot();
+    {
+        penumbra::gl::StateSave saved;
+        REQUIRE(pipeline.run(input, lut_table, draw) == Status::Ok);
+        CHECK(penumbra::test::rasterStateSnapshot() != before);
+    }
+    CHECK(penumbra::test::rasterStateSnapshot() == before);
+    setDefaultState();
 }
 
 TEST_CASE("DeepShadowMapBuilder::build: the engine's raster state changes no fragment and no vertex") {

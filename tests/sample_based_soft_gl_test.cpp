@@ -509,3 +509,46 @@ TEST_CASE("GPU sample-based soft: depth-reconstructed view samples, exact == ora
     CHECK(untested == 0);
     CHECK(rejected_not_background == 0);
 }
+
+TEST_CASE("SoftSkips::empty_blocks: the occupancy stencil changes no bit and no counter, past its 255 blocks too") {
+    penumbra::test::context();
+    // A 16 x 16 light grid and 4 samples per list block: the longest lists need hundreds of
+    // blocks, so the light pass runs blocks the 8-bit stencil cannot count (drawn without it).
+    const penumbra::test::GlWorld w(penumbra::scene::columns(4));
+    const penumbra::test::GlSoftLight soft(w, 32, 16, 32);
+    const penumbra::BufferRange lut_table = soft.table();
+    const penumbra::SampleDepthInput input{w.gbuffer.depthTexture(), 0, w.view};
+    std::vector<uint32_t> masks[2];
+    penumbra::SampleBasedSoftFrame frames[2];
+    for (int skip = 0; skip < 2; ++skip) {
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.grid_width = options.grid_height = 16;
+        options.list_block = 4;
+        options.max_list_blocks = 4096;
+        options.skips.empty_blocks = skip == 1;
+        penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+        pipeline.reserve(w.samples());
+        pipeline.validate(input, lut_table);
+        REQUIRE(pipeline.run(input, lut_table, [&](penumbra::CasterClass c) {
+            w.gpu.drawClass(c == penumbra::CasterClass::Closed);
+        }) == Status::Ok);
+        masks[skip] = pipeline.readMasks();
+        frames[skip] = pipeline.readFrame();
+    }
+    const penumbra::SampleBasedSoftFrame& on = frames[1];
+    const penumbra::SampleBasedSoftFrame& off = frames[0];
+    MESSAGE("passes ", on.passes, " (max list ", on.statistics.max_list_length, "), fragments ", on.fragments, ", skipped ",
+            on.fragments_skipped, " (off: ", off.fragments_skipped, "), pairs ", on.pairs);
+    CHECK(on.passes > 255);
+    CHECK(on.overflow == 0);
+    CHECK(std::count_if(masks[1].begin(), masks[1].end(), [](uint32_t m) { return m != 0u; }) > 0);
+    CHECK(masks[1] == masks[0]);
+    // The stencil culls the empty blocks' fragments before shading; count_work draws them once more.
+    CHECK(on.fragments == off.fragments);
+    CHECK(on.fragments_skipped > 0);
+    CHECK(on.fragments_skipped > off.fragments_skipped);  // off: only the closed casters' second pass skips
+    CHECK(on.pairs == off.pairs);
+    CHECK(on.exact_tests == off.exact_tests);
+    CHECK(on.triangles_culled == off.triangles_culled);
+    CHECK(on.pairs_front == off.pairs_front);
+}

@@ -29,6 +29,10 @@ inline void setHostileState() {
     glPointSize(3.0f);
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(4.0f, 16.0f);
+    glEnable(GL_STENCIL_TEST);  // kills every fragment of a pass with a stencil buffer that kept it
+    glStencilFunc(GL_NEVER, 7, 0x0Fu);
+    glStencilOp(GL_ZERO, GL_INVERT, GL_DECR_WRAP);
+    glStencilMask(0x3Cu);
     REQUIRE(glGetError() == GL_NO_ERROR);
 }
 
@@ -49,6 +53,10 @@ inline void setDefaultState() {
     glPointSize(1.0f);
     glDisable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(0.0f, 0.0f);
+    glDisable(GL_STENCIL_TEST);
+    glStencilFunc(GL_ALWAYS, 0, 0xFFFFFFFFu);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+    glStencilMask(0xFFFFFFFFu);
     REQUIRE(glGetError() == GL_NO_ERROR);
 }
 
@@ -58,12 +66,17 @@ inline std::vector<double> rasterStateSnapshot() {
     std::vector<double> v;
     const GLenum enables[] = {GL_SCISSOR_TEST,    GL_POLYGON_SMOOTH,   GL_PRIMITIVE_RESTART, GL_PRIMITIVE_RESTART_FIXED_INDEX,
                               GL_POLYGON_OFFSET_FILL, GL_DEPTH_TEST,   GL_CULL_FACE,         GL_DEPTH_CLAMP,
-                              GL_RASTERIZER_DISCARD};
+                              GL_RASTERIZER_DISCARD, GL_STENCIL_TEST};
     for (GLenum e : enables) v.push_back(glIsEnabled(e));
     for (GLenum i = 0; i < 8; ++i) v.push_back(glIsEnabled(GL_CLIP_DISTANCE0 + i));
     v.push_back(glIsEnabledi(GL_BLEND, 0));
     const GLenum integers[] = {GL_CLIP_ORIGIN, GL_CLIP_DEPTH_MODE, GL_FRONT_FACE, GL_PROVOKING_VERTEX, GL_CURRENT_PROGRAM,
-                               GL_DRAW_FRAMEBUFFER_BINDING, GL_VERTEX_ARRAY_BINDING, GL_PRIMITIVE_RESTART_INDEX};
+                               GL_DRAW_FRAMEBUFFER_BINDING, GL_VERTEX_ARRAY_BINDING, GL_PRIMITIVE_RESTART_INDEX,
+                               GL_STENCIL_FUNC, GL_STENCIL_REF, GL_STENCIL_VALUE_MASK, GL_STENCIL_FAIL,
+                               GL_STENCIL_PASS_DEPTH_FAIL, GL_STENCIL_PASS_DEPTH_PASS, GL_STENCIL_WRITEMASK,
+                               GL_STENCIL_BACK_FUNC, GL_STENCIL_BACK_REF, GL_STENCIL_BACK_VALUE_MASK,
+                               GL_STENCIL_BACK_FAIL, GL_STENCIL_BACK_PASS_DEPTH_FAIL, GL_STENCIL_BACK_PASS_DEPTH_PASS,
+                               GL_STENCIL_BACK_WRITEMASK};
     for (GLenum name : integers) {
         GLint value = 0;
         glGetIntegerv(name, &value);

@@ -117,7 +117,8 @@ private:
     GLuint id_ = 0;
 };
 
-/// An owned GL name of one kind (framebuffers, vertex arrays, queries, samplers): movable RAII.
+/// An owned GL name of one kind (framebuffers, renderbuffers, vertex arrays, queries, samplers):
+/// movable RAII.
 template <void (*Create)(GLsizei, GLuint*), void (*Delete)(GLsizei, const GLuint*)>
 class Name {
 public:
@@ -156,6 +157,8 @@ inline void deleteVertexArrays(GLsizei n, const GLuint* ids) { glDeleteVertexArr
 inline void createOcclusionQueries(GLsizei n, GLuint* ids) { glCreateQueries(GL_ANY_SAMPLES_PASSED, n, ids); }
 inline void deleteQueries(GLsizei n, const GLuint* ids) { glDeleteQueries(n, ids); }
 inline void createSamplers(GLsizei n, GLuint* ids) { glCreateSamplers(n, ids); }
+inline void createRenderbuffers(GLsizei n, GLuint* ids) { glCreateRenderbuffers(n, ids); }
+inline void deleteRenderbuffers(GLsizei n, const GLuint* ids) { glDeleteRenderbuffers(n, ids); }
 inline void deleteSamplers(GLsizei n, const GLuint* ids) { glDeleteSamplers(n, ids); }
 }  // namespace detail
 
@@ -163,6 +166,7 @@ using Framebuffer = Name<detail::createFramebuffers, detail::deleteFramebuffers>
 using VertexArray = Name<detail::createVertexArrays, detail::deleteVertexArrays>;
 using OcclusionQuery = Name<detail::createOcclusionQueries, detail::deleteQueries>;
 using Sampler = Name<detail::createSamplers, detail::deleteSamplers>;
+using Renderbuffer = Name<detail::createRenderbuffers, detail::deleteRenderbuffers>;
 
 /// GPU time of a region via GL_TIME_ELAPSED (nanoseconds). Regions must not nest.
 class GpuTimer {

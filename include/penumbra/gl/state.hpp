@@ -3,7 +3,8 @@
 // first 16 indexed SSBO / UBO ones), texture and sampler units 0-7, image units 0-7, the enables
 // and rasterizer state blocks set (gl::setPassRasterState: scissor test, polygon mode, clip
 // distances 0-7, clip control, depth range, smoothing, offset, primitive restart, front face,
-// provoking vertex) and draw buffer 0's blending and colour mask. Blocks themselves never restore
+// provoking vertex), draw buffer 0's blending and colour mask, and the stencil function, operations
+// and write masks of both faces. Blocks themselves never restore
 // state (the integrator owns it, STYLE.md habit 16); each executor's header lists exactly what it
 // changes. StateSave queries GL (glGet*) when
 // constructed, so it belongs around calls where that cost is acceptable, not in tight frames on
@@ -74,6 +75,15 @@ public:
                                        GL_BLEND_EQUATION_RGB, GL_BLEND_EQUATION_ALPHA};
         for (int b = 0; b < 6; ++b) glGetIntegeri_v(blend_names[b], 0, &blend_state_[b]);
         glGetBooleani_v(GL_COLOR_WRITEMASK, 0, color_mask0_.data());
+        const GLenum stencil_names[2][6] = {
+            {GL_STENCIL_FUNC, GL_STENCIL_REF, GL_STENCIL_VALUE_MASK, GL_STENCIL_FAIL, GL_STENCIL_PASS_DEPTH_FAIL,
+             GL_STENCIL_PASS_DEPTH_PASS},
+            {GL_STENCIL_BACK_FUNC, GL_STENCIL_BACK_REF, GL_STENCIL_BACK_VALUE_MASK, GL_STENCIL_BACK_FAIL,
+             GL_STENCIL_BACK_PASS_DEPTH_FAIL, GL_STENCIL_BACK_PASS_DEPTH_PASS}};
+        for (int f = 0; f < 2; ++f)
+            for (int k = 0; k < 6; ++k) glGetIntegerv(stencil_names[f][k], &stencil_[f][k]);
+        glGetIntegerv(GL_STENCIL_WRITEMASK, &stencil_writemask_[0]);
+        glGetIntegerv(GL_STENCIL_BACK_WRITEMASK, &stencil_writemask_[1]);
     }
     StateSave(const StateSave&) = delete;
     StateSave& operator=(const StateSave&) = delete;
@@ -117,6 +127,13 @@ public:
                              static_cast<GLenum>(blend_state_[2]), static_cast<GLenum>(blend_state_[3]));
         glBlendEquationSeparatei(0, static_cast<GLenum>(blend_state_[4]), static_cast<GLenum>(blend_state_[5]));
         glColorMaski(0, color_mask0_[0], color_mask0_[1], color_mask0_[2], color_mask0_[3]);
+        for (int f = 0; f < 2; ++f) {
+            const GLenum face = f == 0 ? GL_FRONT : GL_BACK;
+            const GLint* s = stencil_[f].data();
+            glStencilFuncSeparate(face, static_cast<GLenum>(s[0]), s[1], static_cast<GLuint>(s[2]));
+            glStencilOpSeparate(face, static_cast<GLenum>(s[3]), static_cast<GLenum>(s[4]), static_cast<GLenum>(s[5]));
+            glStencilMaskSeparate(face, static_cast<GLuint>(stencil_writemask_[f]));
+        }
     }
 
 private:
@@ -147,6 +164,8 @@ private:
     GLboolean blend0_ = GL_FALSE;
     std::array<GLint, 6> blend_state_{};
     std::array<GLboolean, 4> color_mask0_{GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE};
+    std::array<std::array<GLint, 6>, 2> stencil_{};  // front, back: func, ref, value mask, fail, zfail, zpass
+    std::array<GLint, 2> stencil_writemask_{};
 
     static void save(GLenum binding, GLenum start, GLenum size, int i, Indexed& out) {
         glGetIntegeri_v(binding, static_cast<GLuint>(i), &out.buffer);

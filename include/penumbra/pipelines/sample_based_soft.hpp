@@ -94,9 +94,11 @@ inline const char* softModeName(SoftMode mode) {
 /// is an approximation whose bits may move with the plane cut and the silhouette skip.
 /// Value-initialised = all on but silhouettes (which needs adjacency).
 struct SoftSkips {
-    /// GPU only: a light-pass fragment whose list block is empty returns before the caster's
-    /// per-fragment setup (about half the fragments of a typical frame). Counted:
-    /// fragments_skipped.
+    /// GPU only: a light-pass fragment whose list block is empty is never shaded (about half the
+    /// fragments of a typical frame): an occupancy pass counts each texel's non-empty list blocks
+    /// into a stencil, and the light pass of block b tests it with early fragment tests (a fragment
+    /// that gets through anyway, past block 254, returns before the caster's per-fragment setup).
+    /// Counted: fragments_skipped.
     bool empty_blocks = true;
     /// Casters drawn as CasterClass::Closed (watertight, consistently outward-oriented meshes, as
     /// scene::Mesh::closed promises; unions of such meshes qualify) cast only their triangles that

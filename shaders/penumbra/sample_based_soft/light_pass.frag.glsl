@@ -20,13 +20,23 @@
 //   - Brute: every light sample by that exact test.
 // Result: atomicOr into masks[id * words + s / 32] (bit s % 32: light sample s of the view
 // sample's set blocked). No colour output; bind a W x H framebuffer with no attachments.
+// Defines: PENUMBRA_SBS_MODE (the pipeline's SoftMode, fixed when it is built: the other modes'
+// code is compiled out), PENUMBRA_SBS_COUNT_WORK, PENUMBRA_SBS_SILHOUETTES, PENUMBRA_SBS_CLOSED_CASTERS.
+// Cost model: SIMD drivers run every branch some lane of a group takes; llvmpipe (Mesa 22) runs
+// every `if` under a lane mask without branching and every loop body at least once per group, so
+// each pair has one exact-test site (the pending words below), not one per table and word.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
+// penumbra-permutation: PENUMBRA_SBS_MODE=1
+// penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
 #include "penumbra/sample_lists/sample_lists_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
 #define PENUMBRA_SBS_COUNT_WORK 1
+#endif
+#ifndef PENUMBRA_SBS_MODE
+#define PENUMBRA_SBS_MODE PENUMBRA_SBS_MODE_EXACT_ID  // PENUMBRA_SBS_MODE_*_ID: the parameter block's config.x
 #endif
 #ifndef PENUMBRA_SBS_SILHOUETTES
 #define PENUMBRA_SBS_SILHOUETTES 0  // 1: SoftSkips::silhouettes (the marks buffer is bound)
@@ -72,6 +82,10 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 
 #define PENUMBRA_AFH_EXACT 1
 #include "penumbra/alias_free_hard/blocker_test.glsl"
+
+// SoftSkips::empty_blocks: the pipeline's occupancy stencil (occupancy.frag.glsl) culls empty list
+// blocks' fragments before they are shaded, which needs the test before the shader's stores.
+layout(early_fragment_tests) in;
 
 layout(location = 0) flat in vec3 penumbraSbsVertex0;
 layout(location = 1) flat in vec3 penumbraSbsVertex1;
@@ -150,8 +164,10 @@ void main() {
 #endif
     if (range.y == 0u && (P.reserved.y & PENUMBRA_SBS_FLAG_SKIP_EMPTY) != 0u) {
         // SoftSkips::empty_blocks: an empty list block (an empty texel, or past its list's end) has
-        // nothing to test, so none of the caster's per-fragment setup below (about half the light
-        // pass's fragments). Off: the same setup as any fragment, then an empty walk.
+        // nothing to test. The pipeline's occupancy stencil culls these fragments before shading
+        // (blocks 0..254); those that arrive (count_work's complement draw, later blocks) return
+        // before the caster's per-fragment setup. Off: the same setup as any fragment, then an
+        // empty walk.
 #if PENUMBRA_SBS_COUNT_WORK
         atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
         atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS_SKIPPED], 1u);
@@ -159,7 +175,7 @@ void main() {
         return;
     }
     const dvec3 v0 = dvec3(penumbraSbsVertex0), v1 = dvec3(penumbraSbsVertex1), v2 = dvec3(penumbraSbsVertex2);
-    const uint mode = P.config.x, n = P.config.y, words = P.config.w, tables = P.counts.z;
+    const uint mode = uint(PENUMBRA_SBS_MODE), n = P.config.y, words = P.config.w, tables = P.counts.z;
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
     // SoftSkips::plane_cut: T's plane against the light, once per fragment.
     const bool plane_cut = (P.reserved.y & PENUMBRA_SBS_FLAG_PLANE_CUT) != 0u;
@@ -230,6 +246,7 @@ void main() {
             continue;
         }
         ++pairs;
+#if PENUMBRA_SBS_SILHOUETTES
         if (hard_texel) {
             ++hard;
             ++tests;
@@ -241,6 +258,7 @@ void main() {
             }
             continue;
         }
+#endif
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
         PenumbraSbsPlane planes[4];
         if (!all_exact) {
@@ -305,71 +323,76 @@ void main() {
                 uncertain_bits += n;
             }
         }
-        if (all_exact) {
-            for (uint w = 0u; w < words; ++w) {
-                uint m = 0u;
-                for (uint bit = 0u; bit < 32u && 32u * w + bit < n; ++bit) {
-                    ++tests;
-                    if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + 32u * w + bit)) m |= 1u << bit;
-                }
-                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + w], m);
+        // Exact/Brute: the words of the sample's mask with light samples left to the exact test
+        // (an all-exact pair: every word, every sample).
+        uint pending = all_exact ? (words >= 32u ? 0xFFFFFFFFu : (1u << words) - 1u) : 0u;
+        uvec4 undecided[PENUMBRA_SBS_MAX_WORDS / 4u];  // the uncertain bits of pending words, per table
+#if PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_BRUTE_ID
+        if (!all_exact) {
+            // Each plane's LUT cell is the same in every table of the set: located once per pair,
+            // not once per 128-sample block (N = 1024: 4 locations instead of 32).
+            PenumbraLutCell cells[4];
+            for (int i = 0; i < 4; ++i) cells[i] = penumbraLutLocate(P.lut, vec4(planes[i].plane));
+            // The whole light in front of one plane (a trivial cell: no sample behind it, in every
+            // table; in Exact that plane must be proven, else its cell is not trusted): T blocks
+            // nothing for p. Every table would AND in a zero mask and leave no bit uncertain, so the
+            // pair ends here, with the same bits, before 4 x tables lookups (the CPU twin likewise).
+            if ((cells[0].trivial < 0 && (!exact || planes[0].proven)) || (cells[1].trivial < 0 && (!exact || planes[1].proven)) ||
+                (cells[2].trivial < 0 && (!exact || planes[2].proven)) || (cells[3].trivial < 0 && (!exact || planes[3].proven))) {
+                ++front;
+                continue;
             }
-            continue;
-        }
-        // Each plane's LUT cell is the same in every table of the set: located once per pair, not
-        // once per 128-sample block (N = 1024: 4 locations instead of 32).
-        PenumbraLutCell cells[4];
-        for (int i = 0; i < 4; ++i) cells[i] = penumbraLutLocate(P.lut, vec4(planes[i].plane));
-        // The whole light in front of one plane (a trivial cell: no sample behind it, in every
-        // table; in Exact that plane must be proven, else its cell is not trusted): T blocks
-        // nothing for p. Every table would AND in a zero mask and leave no bit uncertain, so the
-        // pair ends here, with the same bits, before 4 x tables lookups (the CPU twin likewise).
-        if ((cells[0].trivial < 0 && (!exact || planes[0].proven)) || (cells[1].trivial < 0 && (!exact || planes[1].proven)) ||
-            (cells[2].trivial < 0 && (!exact || planes[2].proven)) || (cells[3].trivial < 0 && (!exact || planes[3].proven))) {
-            ++front;
-            continue;
-        }
-        for (uint block = 0u; block < tables; ++block) {
-            const uint table = set * tables + block;
-            if (mode == PENUMBRA_SBS_MODE_LUT) {
+            for (uint block = 0u; block < tables; ++block) {
+                const uint table = set * tables + block;
+#if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_LUT_ID
                 const uvec4 m = penumbraLutCentreCell(cells[0], table) & penumbraLutCentreCell(cells[1], table) &
                                 penumbraLutCentreCell(cells[2], table) & penumbraLutCentreCell(cells[3], table);
                 penumbraSbsOrTable(mask_base + block * 4u, words - block * 4u, m);
-                continue;
-            }
-            const uvec4 valid = penumbraLutValidMask(P.lut, table);
-            // The four planes, unrolled (constant indices: no per-lane arrays on SIMD drivers).
-            uvec4 u0 = valid, u1 = valid, u2 = valid, u3 = valid;
-            uvec4 c0 = uvec4(0u), c1 = uvec4(0u), c2 = uvec4(0u), c3 = uvec4(0u);
-            if (planes[0].proven) c0 = penumbraLutLookupCell(cells[0], table, u0) & ~u0;  // penumbraLutBehindCertified
-            if (planes[1].proven) c1 = penumbraLutLookupCell(cells[1], table, u1) & ~u1;
-            if (planes[2].proven) c2 = penumbraLutLookupCell(cells[2], table, u2) & ~u2;
-            if (planes[3].proven) c3 = penumbraLutLookupCell(cells[3], table, u3) & ~u3;
-            unproven_planes += (planes[0].proven ? 0u : 1u) + (planes[1].proven ? 0u : 1u) + (planes[2].proven ? 0u : 1u) +
-                               (planes[3].proven ? 0u : 1u);
-            uvec4 certain = c0, uncertain = u0;
-            penumbraLutCombine(certain, uncertain, c1, u1);
-            penumbraLutCombine(certain, uncertain, c2, u2);
-            penumbraLutCombine(certain, uncertain, c3, u3);
-            uncertain &= valid;
-            const uvec4 counts = uvec4(bitCount(uncertain));
-            uncertain_bits += (counts.x + counts.y) + (counts.z + counts.w);
-            if (uncertain == uvec4(0u)) {  // every bit certain (nearly always): no exact test
+#else
+                const uvec4 valid = penumbraLutValidMask(P.lut, table);
+                // The four planes, unrolled (constant indices: no per-lane arrays on SIMD drivers).
+                uvec4 u0 = valid, u1 = valid, u2 = valid, u3 = valid;
+                uvec4 c0 = uvec4(0u), c1 = uvec4(0u), c2 = uvec4(0u), c3 = uvec4(0u);
+                if (planes[0].proven) c0 = penumbraLutLookupCell(cells[0], table, u0) & ~u0;  // penumbraLutBehindCertified
+                if (planes[1].proven) c1 = penumbraLutLookupCell(cells[1], table, u1) & ~u1;
+                if (planes[2].proven) c2 = penumbraLutLookupCell(cells[2], table, u2) & ~u2;
+                if (planes[3].proven) c3 = penumbraLutLookupCell(cells[3], table, u3) & ~u3;
+                unproven_planes += (planes[0].proven ? 0u : 1u) + (planes[1].proven ? 0u : 1u) + (planes[2].proven ? 0u : 1u) +
+                                   (planes[3].proven ? 0u : 1u);
+                uvec4 certain = c0, uncertain = u0;
+                penumbraLutCombine(certain, uncertain, c1, u1);
+                penumbraLutCombine(certain, uncertain, c2, u2);
+                penumbraLutCombine(certain, uncertain, c3, u3);
+                uncertain &= valid;
+                const uvec4 counts = uvec4(bitCount(uncertain));
+                uncertain_bits += (counts.x + counts.y) + (counts.z + counts.w);
                 penumbraSbsOrTable(mask_base + block * 4u, words - block * 4u, certain);
-                continue;
-            }
-            for (uint w = 0u; w < 4u && block * 4u + w < words; ++w) {
-                uint m = certain[w];
-                uint bits = uncertain[w];
-                while (bits != 0u) {
-                    const uint bit = uint(findLSB(bits));
-                    bits &= bits - 1u;
-                    ++tests;
-                    if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + block * 128u + 32u * w + bit)) m |= 1u << bit;
-                }
-                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + block * 4u + w], m);
+                undecided[block] = uncertain;  // every bit certain (nearly always): nothing pending
+                pending |= uint(uncertain.x != 0u) << (4u * block) | uint(uncertain.y != 0u) << (4u * block + 1u) |
+                           uint(uncertain.z != 0u) << (4u * block + 2u) | uint(uncertain.w != 0u) << (4u * block + 3u);
+#endif
             }
         }
+#endif
+#if PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_LUT_ID
+        // One exact-test site for every pending word: bit b of word w is light sample 32 w + b.
+        uint w = 0u, bits = 0u, m = 0u;
+        while (pending != 0u) {
+            if (bits == 0u) {
+                w = uint(findLSB(pending));
+                bits = all_exact ? (32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u) : undecided[w >> 2u][w & 3u];
+                m = 0u;
+            }
+            const uint bit = uint(findLSB(bits));
+            bits &= bits - 1u;
+            ++tests;
+            if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + 32u * w + bit)) m |= 1u << bit;
+            if (bits == 0u) {
+                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + w], m);
+                pending &= ~(1u << w);
+            }
+        }
+#endif
     }
 #if PENUMBRA_SBS_COUNT_WORK
     atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);

@@ -55,7 +55,8 @@ void main() {
         const bool away = penumbraSbsCasterFacesAway(c);
         if (away != culled_pass) {
 #if PENUMBRA_SBS_COUNT_WORK
-            if (away && penumbraSbsParams.grid.w == 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+            if (away && penumbraSbsParams.grid.w == 0u && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u)
+                atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
 #endif
             return;
         }

@@ -71,6 +71,12 @@
 #define PENUMBRA_SBS_MODE_EXACT 0u
 #define PENUMBRA_SBS_MODE_LUT 1u
 #define PENUMBRA_SBS_MODE_BRUTE 2u
+// The same values for the preprocessor (no suffix): the light pass's PENUMBRA_SBS_MODE define.
+#define PENUMBRA_SBS_MODE_EXACT_ID 0
+#define PENUMBRA_SBS_MODE_LUT_ID 1
+#define PENUMBRA_SBS_MODE_BRUTE_ID 2
+// Mask words per view sample at most (N <= 1024 light samples per set).
+#define PENUMBRA_SBS_MAX_WORDS 32u
 
 // Visibility values the resolve writes for samples it could not evaluate (visible fraction
 // otherwise, in [0, 1]).
@@ -105,6 +111,8 @@
 #define PENUMBRA_SBS_FLAG_SILHOUETTES 8u     // texels no potential silhouette's region marked: one hard test
 #define PENUMBRA_SBS_FLAG_CULLED_PASS 16u    // the second pass over closed casters: only the culled triangles,
                                              // only for samples flagged near (with PENUMBRA_SBS_FLAG_CULL_CLOSED)
+#define PENUMBRA_SBS_FLAG_COMPLEMENT 32u     // count_work's draw of the fragments the occupancy stencil
+                                             // culled (empty blocks): the geometry stage counts no culled triangle
 
 #ifdef __cplusplus
 namespace penumbra::shared {  // C++: include penumbra/light_lut.hpp first (PenumbraLutParams)

@@ -47,10 +47,16 @@
 //   per frame: run() — (1) lists (count, scan, scatter; the influence setup's view-projection)
 //             + statistics, (2) a predicate pass: one point per list block inside an occlusion
 //             query, surviving when the longest list needs that block, (2b) with
-//             skips.silhouettes the silhouette pass (your DrawAdjacency once), (3) the light pass:
+//             skips.silhouettes the silhouette pass (your DrawAdjacency once), (2c) with
+//             skips.empty_blocks the occupancy pass: a full-screen triangle per block (under the
+//             same conditional render) increments a W x H GL_STENCIL_INDEX8 stencil where the
+//             texel's block holds samples, (3) the light pass:
 //             for each block b < max_list_blocks under glBeginConditionalRender(query b), every
-//             caster drawn (your callback with Closed, then Open) into a W x H framebuffer with no
-//             attachments; the geometry stage culls (skips) and emits the influence region, each
+//             caster drawn (your callback with Closed, then Open) into the pipeline's W x H
+//             framebuffer (the stencil its only attachment; with skips.empty_blocks the stencil
+//             test GL_LESS b and early fragment tests cull empty blocks' fragments before they are
+//             shaded, blocks 0..254; count_work draws the culled ones once more, GL_GEQUAL b, to
+//             count them); the geometry stage culls (skips) and emits the influence region, each
 //             fragment walks its texel's list block (see light_pass.frag.glsl); with
 //             skips.closed_casters then once more per block with Closed (the culled triangles, for
 //             the receivers that need them), (4) resolve. Nothing is read back, queried, allocated or
@@ -58,9 +64,10 @@
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
-// (off), the rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip
+// (off), GL_STENCIL_TEST (off at the end), the stencil function, operations and write mask (0
+// at the end) with skips.empty_blocks, the rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip
 // distances off, clip control lower-left / -1..1, ...: the engine's leftovers cannot clip the
-// passes), the vertex-array binding (its own empty VAO during the predicate pass; then whatever
+// passes), the vertex-array binding (its own empty VAO during the predicate and occupancy passes; then whatever
 // your callback binds), the uniform-buffer bindings and SSBO bindings of SbsBindings, and
 // whatever the sample-list builder and scanner bind. Your callback must leave the light pass's
 // SSBO bindings alone. Ends with GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
@@ -120,8 +127,9 @@ struct SampleBasedSoftFrame {
     // Work counters (count_work; overflow always).
     uint64_t fragments = 0, pairs = 0, pairs_ignored = 0, pairs_unproven = 0, uncertain_bits = 0, exact_tests = 0,
              planes_unproven = 0, overflow = 0;
-    /// What the skips removed (SoftSkips; count_work): fragments of empty list blocks that returned
-    /// at once, closed casters' triangles culled (per frame, not per block), pairs cut by T's plane.
+    /// What the skips removed (SoftSkips; count_work): fragments of empty list blocks (culled by
+    /// the occupancy stencil before shading; count_work draws them once more to count them), closed
+    /// casters' triangles culled (per frame, not per block), pairs cut by T's plane.
     uint64_t fragments_skipped = 0, triangles_culled = 0, pairs_cut = 0;
     /// SoftSkips::silhouettes: pairs outside every silhouette's region (one exact test each).
     uint64_t pairs_hard = 0;
@@ -176,6 +184,7 @@ public:
         }
         ShaderDefines defines = influence.defines;
         defines.push_back({"PENUMBRA_SBS_COUNT_WORK", options_.count_work ? "1" : "0"});
+        defines.push_back({"PENUMBRA_SBS_MODE", std::to_string(static_cast<uint32_t>(options_.mode))});
         defines.push_back({"PENUMBRA_SBS_SILHOUETTES", options_.skips.silhouettes ? "1" : "0"});
         defines.push_back({"PENUMBRA_SBS_CLOSED_CASTERS", options_.skips.closed_casters ? "1" : "0"});
         const SbsBindings& b = bindings_;
@@ -197,6 +206,13 @@ public:
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
+        if (options_.skips.empty_blocks) {
+            occupancy_ = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/occupancy.frag.glsl"},
+                                          defines, library);
+            stencil_ = gl::Renderbuffer::create();
+            glNamedRenderbufferStorage(stencil_.id(), GL_STENCIL_INDEX8, static_cast<GLsizei>(options_.grid_width),
+                                       static_cast<GLsizei>(options_.grid_height));
+        }
         if (options_.skips.silhouettes) {
             ShaderDefines edge_defines;  // the influence setup's, uncut: the cut is a triangle's
             for (const auto& d : defines)
@@ -211,7 +227,7 @@ public:
         ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
         ssbo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
         param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(SbsParams), ubo_alignment_) * ubo_alignment_);
-        params_staging_.assign(size_t(param_stride_) * (1 + 3 * options_.max_list_blocks), 0u);
+        params_staging_.assign(size_t(param_stride_) * (1 + kSlotsPerBlock * options_.max_list_blocks), 0u);
         params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
         influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
         const std::vector<glm::dvec4> world = sampleBasedSoftSampleTable(sets_, options_.rotations);
@@ -222,6 +238,14 @@ public:
         framebuffer_ = gl::Framebuffer::create();
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
+        if (options_.skips.empty_blocks) {
+            glNamedFramebufferRenderbuffer(framebuffer_.id(), GL_STENCIL_ATTACHMENT, GL_RENDERBUFFER, stencil_.id());
+            const GLenum complete = glCheckNamedFramebufferStatus(framebuffer_.id(), GL_DRAW_FRAMEBUFFER);
+            PENUMBRA_CHECK(complete == GL_FRAMEBUFFER_COMPLETE, "penumbra::SampleBasedSoftShadows: the light pass's ",
+                           options_.grid_width, " x ", options_.grid_height,
+                           " framebuffer with a GL_STENCIL_INDEX8 attachment (skips.empty_blocks) is incomplete (status 0x",
+                           std::hex, complete, std::dec, "); set skips.empty_blocks = false");
+        }
         empty_vao_ = gl::VertexArray::create();
         for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
         if (options_.timings) {
@@ -356,7 +380,13 @@ private:
     InfluenceRegionSetup influence_;
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
-    gl::Program light_pass_, blocks_, resolve_, silhouettes_;
+    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_;
+    gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
+    /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
+    /// pass), closed for count_work's complement draw.
+    static constexpr uint32_t kSlotsPerBlock = 4;
+    /// The occupancy stencil holds 8 bits: blocks from 255 on are drawn without it.
+    static constexpr uint32_t kStencilBlocks = 255;
     gl::Buffer marks_;                                // SoftSkips::silhouettes: W x H texel marks
     gl::Buffer near_;                                 // SoftSkips::closed_casters: per sample
     const DrawAdjacency* draw_adjacency_ = nullptr;   // this run's (begin() .. the light pass)
@@ -424,14 +454,15 @@ private:
     void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
-        // Slot 0: the predicate pass and the resolve; 1 + 3 b + c: list block b, c = 0 closed, 1 open,
-        // 2 closed again (SoftSkips::closed_casters' second pass).
-        for (uint32_t slot = 0; slot <= 3 * options_.max_list_blocks; ++slot) {
-            const uint32_t block = slot == 0 ? 0u : (slot - 1) / 3;
-            const uint32_t c = slot == 0 ? 1u : (slot - 1) % 3;
+        // Slot 0: the predicate pass and the resolve; 1 + 4 b + c: list block b, c = 0 closed, 1 open,
+        // 2 closed again (SoftSkips::closed_casters' second pass), 3 closed for count_work's
+        // complement draw (no culled triangle counted twice).
+        for (uint32_t slot = 0; slot <= kSlotsPerBlock * options_.max_list_blocks; ++slot) {
+            const uint32_t block = slot == 0 ? 0u : (slot - 1) / kSlotsPerBlock;
+            const uint32_t c = slot == 0 ? 1u : (slot - 1) % kSlotsPerBlock;
             // Validated at construction: cannot throw.
-            const SbsParams p =
-                sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
+            SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
+            if (c == 3) p.reserved.y |= PENUMBRA_SBS_FLAG_COMPLEMENT;
             std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
         glNamedBufferSubData(params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
@@ -453,6 +484,7 @@ private:
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
+        glDisable(GL_STENCIL_TEST);  // the occupancy stencil's own state comes at (2c)
         gl::setPassRasterState();
         if (!timers_.empty()) timers_[1].begin();
         // (2) Which list blocks does the longest list need? One point per block, on the GPU.
@@ -483,7 +515,40 @@ private:
             (*draw_adjacency_)();
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
-        // (3) Light pass, block by block; blocks no list needs are skipped by the GPU.
+        // (2c) SoftSkips::empty_blocks: the stencil counts each texel's non-empty list blocks.
+        const bool stencil = options_.skips.empty_blocks;
+        const uint32_t stencil_blocks = std::min(options_.max_list_blocks, kStencilBlocks);
+        if (stencil) {
+            glStencilMask(0xFFu);
+            const GLint clear = 0;
+            glClearNamedFramebufferiv(framebuffer_.id(), GL_STENCIL, 0, &clear);
+            glEnable(GL_STENCIL_TEST);
+            glStencilFunc(GL_ALWAYS, 0, 0xFFu);
+            glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+            occupancy_.use();
+            glBindVertexArray(empty_vao_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            for (uint32_t b = 0; b < stencil_blocks; ++b) {
+                glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                bindParams(1 + kSlotsPerBlock * b + 1);
+                glDrawArrays(GL_TRIANGLES, 0, 3);
+                glEndConditionalRender();
+            }
+            glStencilMask(0u);
+            glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+        }
+        // (3) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
+        // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
+        // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
+        const auto stencilTest = [&](uint32_t b, GLenum func) {
+            if (stencil && b < stencil_blocks) {
+                glEnable(GL_STENCIL_TEST);
+                glStencilFunc(func, static_cast<GLint>(b), 0xFFu);
+            } else {
+                glDisable(GL_STENCIL_TEST);
+            }
+        };
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
@@ -505,12 +570,22 @@ private:
         } else {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
         }
+        const bool complement = stencil && options_.count_work;
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
             glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+            stencilTest(b, GL_LESS);
             for (uint32_t c = 0; c < 2; ++c) {
-                bindParams(1 + 3 * b + c);
+                bindParams(1 + kSlotsPerBlock * b + c);
                 light_pass_.use();
                 draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+            }
+            if (complement && b < stencil_blocks) {
+                stencilTest(b, GL_GEQUAL);
+                for (uint32_t c = 0; c < 2; ++c) {
+                    bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 1));
+                    light_pass_.use();
+                    draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+                }
             }
             glEndConditionalRender();
         }
@@ -519,12 +594,17 @@ private:
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
                 glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-                bindParams(1 + 3 * b + 2);
-                light_pass_.use();
-                draw_casters(CasterClass::Closed);
+                for (GLenum func : {GLenum(GL_LESS), GLenum(GL_GEQUAL)}) {
+                    if (func == GL_GEQUAL && !(complement && b < stencil_blocks)) continue;
+                    stencilTest(b, func);
+                    bindParams(1 + kSlotsPerBlock * b + 2);
+                    light_pass_.use();
+                    draw_casters(CasterClass::Closed);
+                }
                 glEndConditionalRender();
             }
         }
+        glDisable(GL_STENCIL_TEST);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         if (!timers_.empty()) timers_[1].end();
         // (4) Resolve.
