@@ -66,7 +66,10 @@
 //                                    polygon offset (2, 4), nearest texel); ours (exact, N = 256)
 //                                    timed interleaved: ours_speedup = ms / ms_ours (target >= 20,
 //                                    the seed's §5 ~10), ours_error_le_maps = 1 when ours' mismatch
-//                                    and RMSE are both <= the maps'.
+//                                    and RMSE are both <= the maps'; the same for our lut mode
+//                                    (ms_ours_lut, err_*_ours_lut, ours_lut_speedup,
+//                                    ours_lut_error_le_maps: the seed's approximation, whose
+//                                    error is far below the maps').
 //   BM_Pcss                          PCSS from one map_size^2 map at the light's centre (32
 //                                    blocker-search taps, 64 filter taps); its RMSE against the
 //                                    N = 256 oracle (err_visibility_rmse) and, because ours equals
@@ -545,22 +548,29 @@ void BM_ShadowMapsAveraged(benchmark::State& state) {
         const penumbra::bench::AveragedShadowMaps maps(*v.gpu, v.lifted, v.count, c.worldSamples(), v.lo, v.hi,
                                                        sizes().map_size);
         Ours ours(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
+        Ours ours_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
         std::vector<Method> methods;
         methods.push_back({"", [&maps] { maps.run(); }});
         methods.push_back({"ours", [&ours] { ours.run(); }});
+        methods.push_back({"ours_lut", [&ours_lut] { ours_lut.run(); }});
         const bool q = timeMethods(state, methods);
         gl::checkErrors("sample_based_soft_bench");
-        if (!ours.ok) {
+        if (!ours.ok || !ours_lut.ok) {
             state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
             return;
         }
         const Errors e_maps = compareWithOracle(v, c.truth, maps.readMasks(), maps.words(), maps.readVisibility());
         const Errors e_ours = compareOurs(ours, c.truth);
+        const Errors e_lut = compareOurs(ours_lut, c.truth);
         setErrors(state, e_maps);
         setErrors(state, e_ours, "_ours");
+        setErrors(state, e_lut, "_ours_lut");
         state.counters["ours_speedup"] = ratio(methods[0].ms(q), methods[1].ms(q));
         state.counters["ours_error_le_maps"] =
             (e_ours.mismatchRate() <= e_maps.mismatchRate() && e_ours.rmse <= e_maps.rmse) ? 1.0 : 0.0;
+        state.counters["ours_lut_speedup"] = ratio(methods[0].ms(q), methods[2].ms(q));
+        state.counters["ours_lut_error_le_maps"] =
+            (e_lut.mismatchRate() <= e_maps.mismatchRate() && e_lut.rmse <= e_maps.rmse) ? 1.0 : 0.0;
         state.counters["map_size"] = double(maps.mapSize());
         setScene(state, v, kBaselineSamples);
         leaveNoBindings();
