@@ -131,17 +131,6 @@ double msSince(std::chrono::steady_clock::time_point start) {
 // ---- scene, light, setup (reusable by GPU entries) ----
 
 /// Every mesh of the scene except the ground plane, concatenated (indices offset).
-penumbra::scene::Mesh casterMesh(const penumbra::scene::Scene& scene) {
-    penumbra::scene::Mesh out;
-    out.name = scene.name;
-    for (const penumbra::scene::Mesh& m : scene.meshes) {
-        if (m.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(out.positions.size());
-        out.positions.insert(out.positions.end(), m.positions.begin(), m.positions.end());
-        for (uint32_t i : m.indices) out.indices.push_back(base + i);
-    }
-    return out;
-}
 
 struct DsmBenchLight {
     penumbra::DsmLight light;
@@ -181,7 +170,7 @@ DsmBenchScene& dsmBenchScene(const std::string& name) {
     if (!s) {
         s = std::make_unique<DsmBenchScene>();
         s->name = name;
-        s->casters = casterMesh(penumbra::scene::builtin(name));
+        s->casters = penumbra::scene::builtin(name).casters();
         s->bounds = s->casters.bounds();
         s->light = dsmBenchLight(s->casters);
         s->opacity.mesh = glm::vec3(kOpacity);

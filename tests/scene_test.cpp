@@ -513,6 +513,20 @@ TEST_CASE("scene: bounds, triangle count and merged") {
     CHECK(Scene{}.bounds().empty());
     CHECK(Scene{}.triangleCount() == 0);
     CHECK_FALSE(Scene{}.merged().closed);
+
+    // casters(): every mesh but the ground, as merged() builds it.
+    REQUIRE(scene.meshes[0].name == "ground");
+    const Mesh casters = scene.casters();
+    CHECK(casters.name == "columns");
+    CHECK(casters.closed);  // the columns alone are closed
+    CHECK(sameMesh(casters, scene.meshes[1]));
+    CHECK(sameMesh(casters, lone.merged()));
+    CHECK(sameMesh(lone.casters(), lone.merged()));  // no ground: the same as merged()
+    CHECK(casters.triangleCount() + scene.meshes[0].triangleCount() == scene.triangleCount());
+    Scene ground_only;
+    ground_only.meshes.push_back(scene.meshes[0]);
+    CHECK(ground_only.casters().positions.empty());
+    CHECK_FALSE(ground_only.casters().closed);
 }
 
 TEST_CASE("scene: mesh utilities") {

@@ -2414,14 +2414,10 @@ struct DsmCasters {
 };
 
 DsmCasters dsmCasters(const penumbra::scene::Scene& scene) {
-    DsmCasters c;
-    for (const auto& mesh : scene.meshes) {
-        if (mesh.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(c.positions.size());
-        c.positions.insert(c.positions.end(), mesh.positions.begin(), mesh.positions.end());
-        for (uint32_t idx : mesh.indices) c.indices.push_back(base + idx);
-        c.meshes.push_back(mesh.name);
-    }
+    penumbra::scene::Mesh merged = scene.casters();
+    DsmCasters c{std::move(merged.positions), std::move(merged.indices), {}};
+    for (const auto& mesh : scene.meshes)
+        if (mesh.name != "ground") c.meshes.push_back(mesh.name);
     return c;
 }
 

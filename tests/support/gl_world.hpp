@@ -72,14 +72,8 @@ struct SceneCasters {
 };
 
 inline SceneCasters castersWithoutGround(const scene::Scene& scene) {
-    SceneCasters c;
-    for (const auto& mesh : scene.meshes) {
-        if (mesh.name == "ground") continue;
-        const uint32_t base = static_cast<uint32_t>(c.positions.size());
-        c.positions.insert(c.positions.end(), mesh.positions.begin(), mesh.positions.end());
-        for (uint32_t i : mesh.indices) c.indices.push_back(base + i);
-    }
-    return c;
+    scene::Mesh casters = scene.casters();
+    return {std::move(casters.positions), std::move(casters.indices)};
 }
 
 /// The soft pipeline's light for a world: N samples (one set, seed 7) of the scene's spherical

@@ -133,6 +133,13 @@ struct Scene {
     /// (disjoint closed pieces stay closed: indices are offset, so no edge gains a false twin);
     /// with a ground plane it is therefore false. Throws penumbra::Error past 2^32 vertices.
     Mesh merged() const;
+    /// merged() without the ground (the mesh named "ground"): the casters of a scene whose ground
+    /// only receives (it lies below everything it could shadow). Triangle i is the i-th non-ground
+    /// triangle in scene order.
+    Mesh casters() const;
+
+private:
+    Mesh mergedMeshes(bool with_ground) const;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -376,12 +383,17 @@ inline void appendRoundedPrism(Mesh& mesh, const glm::vec3& base_center, float h
 
 }  // namespace detail
 
-inline Mesh Scene::merged() const {
+inline Mesh Scene::merged() const { return mergedMeshes(true); }
+inline Mesh Scene::casters() const { return mergedMeshes(false); }
+
+inline Mesh Scene::mergedMeshes(bool with_ground) const {
     Mesh out;
     out.name = name;
     uint64_t vertex_total = 0;
     size_t index_total = 0;
+    const auto kept = [with_ground](const Mesh& mesh) { return with_ground || mesh.name != "ground"; };
     for (const Mesh& mesh : meshes) {
+        if (!kept(mesh)) continue;
         vertex_total += mesh.positions.size();
         index_total += mesh.indices.size();
     }
@@ -389,15 +401,17 @@ inline Mesh Scene::merged() const {
     out.positions.reserve(static_cast<size_t>(vertex_total));
     out.normals.reserve(static_cast<size_t>(vertex_total));
     out.indices.reserve(index_total);
-    bool all_closed = !meshes.empty();
+    bool all_closed = true, any = false;
     for (const Mesh& mesh : meshes) {
+        if (!kept(mesh)) continue;
+        any = true;
         const uint32_t offset = static_cast<uint32_t>(out.positions.size());
         out.positions.insert(out.positions.end(), mesh.positions.begin(), mesh.positions.end());
         out.normals.insert(out.normals.end(), mesh.normals.begin(), mesh.normals.end());
         for (uint32_t index : mesh.indices) out.indices.push_back(index + offset);
         all_closed = all_closed && mesh.closed;
     }
-    out.closed = all_closed;
+    out.closed = any && all_closed;
     return out;
 }
 
