@@ -70,6 +70,10 @@
 //                                    (ms_ours_lut, err_*_ours_lut, ours_lut_speedup,
 //                                    ours_lut_error_le_maps: the seed's approximation, whose
 //                                    error is far below the maps').
+//   BM_ShadowMapsAveraged/256/map:<S> the same at other map sizes S (512, 2048, 4096, 8192; smoke:
+//                                    64, 256): the maps' time against their error, which falls
+//                                    slowly with S (their bias and texel aliasing), with ours
+//                                    timed again in each entry (ours_speedup at every S).
 //   BM_Pcss                          PCSS from one map_size^2 map at the light's centre (32
 //                                    blocker-search taps, 64 filter taps); its RMSE against the
 //                                    N = 256 oracle (err_visibility_rmse) and, because ours equals
@@ -193,6 +197,11 @@ std::vector<uint32_t> sampleCounts() {
 std::vector<uint32_t> radiusPercents() {
     if (penumbra::bench::smokeRun()) return {50u, 200u};
     return {10u, 50u, 100u, 200u, 400u};
+}
+/// BM_ShadowMapsAveraged/256/map:<size>: the maps' sizes besides sizes().map_size.
+std::vector<uint32_t> mapSizeSweep() {
+    if (penumbra::bench::smokeRun()) return {64u, 256u};
+    return {512u, 2048u, 4096u, 8192u};
 }
 std::vector<uint32_t> tessellations() {
     if (penumbra::bench::smokeRun()) return {8u, 16u};
@@ -538,15 +547,14 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
 }
 
 /// sintorn2008 §5's alternative: one shadow map per light sample, averaged; ours timed with it.
-void BM_ShadowMapsAveraged(benchmark::State& state) {
+void BM_ShadowMapsAveraged(benchmark::State& state, uint32_t map_size) {
     if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const uint32_t tessellation = sizes().tessellation;
         const View& v = view(tessellation);
         const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
-        const penumbra::bench::AveragedShadowMaps maps(*v.gpu, v.lifted, v.count, c.worldSamples(), v.lo, v.hi,
-                                                       sizes().map_size);
+        const penumbra::bench::AveragedShadowMaps maps(*v.gpu, v.lifted, v.count, c.worldSamples(), v.lo, v.hi, map_size);
         Ours ours(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
         Ours ours_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
         std::vector<Method> methods;
@@ -572,6 +580,7 @@ void BM_ShadowMapsAveraged(benchmark::State& state) {
         state.counters["ours_lut_error_le_maps"] =
             (e_lut.mismatchRate() <= e_maps.mismatchRate() && e_lut.rmse <= e_maps.rmse) ? 1.0 : 0.0;
         state.counters["map_size"] = double(maps.mapSize());
+        state.counters["maps_per_batch"] = double(maps.batchLayers());
         setScene(state, v, kBaselineSamples);
         leaveNoBindings();
     } catch (const std::exception& e) {
@@ -647,7 +656,12 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
         }));
     }
     const std::string maps_name = "BM_ShadowMapsAveraged/" + std::to_string(kBaselineSamples);
-    configure(benchmark::RegisterBenchmark(maps_name.c_str(), BM_ShadowMapsAveraged));
+    configure(benchmark::RegisterBenchmark(maps_name.c_str(),
+                                           [](benchmark::State& s) { BM_ShadowMapsAveraged(s, sizes().map_size); }));
+    for (const uint32_t size : mapSizeSweep()) {
+        const std::string name = maps_name + "/map:" + std::to_string(size);
+        configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { BM_ShadowMapsAveraged(s, size); }));
+    }
     configure(benchmark::RegisterBenchmark("BM_Pcss", BM_Pcss));
     for (const uint32_t t : tessellations()) {
         const std::string name = "BM_SoftShadowsTriangles/" + std::to_string(t);

@@ -8,10 +8,14 @@
 //                       light sample (the same world samples the pipeline and the oracle use), each
 //                       rendered with every caster from its own frustum, and per view sample one
 //                       nearest-texel depth compare per map: bit s of the sample's mask = light
-//                       sample s blocked, visibility = 1 - popcount / N. Maps are rendered 32 at a
+//                       sample s blocked, visibility = 1 - popcount / N. Maps are rendered L at a
 //                       time into the layers of one GL_TEXTURE_2D_ARRAY, then one compute pass
-//                       writes the 32 bits of that batch per view sample (one mask word, no
-//                       read-modify-write), so the maps cost N depth renders + N / 32 lookups.
+//                       writes the L bits of that batch per view sample, so the maps cost N depth
+//                       renders + N / L lookup passes. L = 32 (one whole mask word per pass, no
+//                       read-modify-write) while 32 maps fit in kMapBatchBytes (2 GiB: map sizes
+//                       up to 4096^2); larger maps take L = the power of two that fits (8 at
+//                       8192^2), and each pass ORs its bits into the word (each word is owned
+//                       by one invocation; a barrier orders the passes).
 //   Pcss                percentage-closer soft shadows (Fernando 2005), the usual real-time
 //                       approximation: one depth map from the light's centre; per view sample a
 //                       blocker search over the map region from which blockers between the sample
@@ -53,8 +57,18 @@ namespace penumbra::bench {
 // glPolygonOffset(factor, units) of every baseline depth map.
 inline constexpr float kBaselineSlopeBias = 2.0f;
 inline constexpr float kBaselineConstantBias = 4.0f;
-// Maps per GL_TEXTURE_2D_ARRAY batch: one 32-bit mask word per view sample and batch.
+// Maps per GL_TEXTURE_2D_ARRAY batch: at most one 32-bit mask word per view sample and batch, and
+// at most kMapBatchBytes of depth texels.
 inline constexpr uint32_t kMapsPerBatch = 32;
+inline constexpr uint64_t kMapBatchBytes = 2ull << 30;
+
+/// Layers per batch for maps of size^2 float depths: a power of two in [1, 32] (it divides 32, so
+/// a batch never straddles two mask words).
+inline uint32_t mapsPerBatch(uint32_t size) {
+    uint32_t layers = kMapsPerBatch;
+    while (layers > 1 && uint64_t(layers) * size * size * 4 > kMapBatchBytes) layers /= 2;
+    return layers;
+}
 
 /// A light frustum for a baseline depth map (see the file comment).
 struct BaselineFrustum {
@@ -119,8 +133,9 @@ inline void endDepthMaps() {
 inline const ShaderLibrary& baselineShaders() {
     static const ShaderLibrary library = [] {
         ShaderLibrary lib = ShaderLibrary::embedded();
-        // One batch of averaged shadow maps: bit l of the batch's word = light sample 32 batch + l
-        // blocked (nearest texel, `>`: the map's bias is its polygon offset).
+        // One batch of averaged shadow maps: bit (first % 32) + l of word first / 32 = light sample
+        // first + l blocked (nearest texel, `>`: the map's bias is its polygon offset); a batch
+        // that starts a word writes it, the others OR into it.
         lib.add("bench/soft/maps_accumulate.comp.glsl", R"(
 #include "penumbra/common/dispatch.glsl"
 layout(local_size_x = 256) in;
@@ -129,7 +144,7 @@ layout(std430, binding = 1) buffer Masks { uint masks[]; };
 layout(std430, binding = 2) readonly buffer LightTextures { mat4 light_textures[]; };
 layout(binding = 0) uniform sampler2DArray maps;
 layout(location = 0) uniform uint sample_count;
-layout(location = 1) uniform uint batch;
+layout(location = 1) uniform uint first;
 layout(location = 2) uniform uint words;
 layout(location = 3) uniform uint layers;
 
@@ -141,7 +156,7 @@ void main() {
     if (p.w != 0.0) {
         const ivec2 size = textureSize(maps, 0).xy;
         for (uint l = 0u; l < layers; ++l) {
-            const vec4 t = light_textures[batch * 32u + l] * vec4(p.xyz, 1.0);
+            const vec4 t = light_textures[first + l] * vec4(p.xyz, 1.0);
             const vec3 q = t.xyz / t.w;
             // Every receiver lies inside every map's frustum (baselineFrustum); NaN stays lit.
             if (!(t.w > 0.0) || !(q.x >= 0.0 && q.x <= 1.0 && q.y >= 0.0 && q.y <= 1.0)) continue;
@@ -149,7 +164,8 @@ void main() {
             if (min(q.z, 1.0) > texelFetch(maps, ivec3(texel, int(l)), 0).r) mask |= 1u << l;
         }
     }
-    masks[id * words + batch] = mask;
+    const uint word = id * words + first / 32u, shift = first % 32u;
+    masks[word] = shift == 0u ? mask : masks[word] | (mask << shift);
 }
 )");
         // Visible fraction of each view sample from its mask (as the pipeline's resolve).
@@ -263,7 +279,7 @@ public:
                        const std::vector<glm::dvec3>& light_samples, const glm::vec3& lo, const glm::vec3& hi,
                        uint32_t map_size)
         : casters_(casters), positions_(positions), count_(sample_count), n_(uint32_t(light_samples.size())),
-          words_((n_ + 31) / 32), size_(map_size), maps_(GL_TEXTURE_2D_ARRAY),
+          words_((n_ + 31) / 32), size_(map_size), per_batch_(mapsPerBatch(map_size)), maps_(GL_TEXTURE_2D_ARRAY),
           masks_(size_t(std::max(sample_count, 1u)) * words_ * 4), visibility_(size_t(std::max(sample_count, 1u)) * 4) {
         PENUMBRA_CHECK(n_ > 0, "AveragedShadowMaps: no light samples");
         std::vector<glm::mat4> light_textures(size_t(words_) * kMapsPerBatch, glm::mat4(1.0f));
@@ -273,11 +289,11 @@ public:
             light_textures[s] = f.light_texture;
         }
         light_textures_ = gl::Buffer::fromVector(light_textures);
-        glTextureStorage3D(maps_.id(), 1, GL_DEPTH_COMPONENT32F, GLsizei(size_), GLsizei(size_), GLsizei(kMapsPerBatch));
+        glTextureStorage3D(maps_.id(), 1, GL_DEPTH_COMPONENT32F, GLsizei(size_), GLsizei(size_), GLsizei(per_batch_));
         glTextureParameteri(maps_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         glTextureParameteri(maps_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         glTextureParameteri(maps_.id(), GL_TEXTURE_COMPARE_MODE, GL_NONE);
-        for (uint32_t l = 0; l < kMapsPerBatch; ++l) {
+        for (uint32_t l = 0; l < per_batch_; ++l) {
             framebuffers_.push_back(gl::Framebuffer::create());
             const GLuint fbo = framebuffers_.back().id();
             glNamedFramebufferTextureLayer(fbo, GL_DEPTH_ATTACHMENT, maps_.id(), 0, GLint(l));
@@ -295,8 +311,8 @@ public:
 
     /// Every map, every lookup and the resolve (the timed region).
     void run() const {
-        for (uint32_t batch = 0; batch < words_; ++batch) {
-            const uint32_t layers = std::min(kMapsPerBatch, n_ - batch * kMapsPerBatch);
+        for (uint32_t first = 0; first < n_; first += per_batch_) {
+            const uint32_t layers = std::min(per_batch_, n_ - first);
             detail::beginDepthMaps(size_);
             depth_.use();
             const float far_depth = 1.0f;
@@ -304,7 +320,7 @@ public:
                 const GLuint fbo = framebuffers_[l].id();
                 glBindFramebuffer(GL_FRAMEBUFFER, fbo);
                 glClearNamedFramebufferfv(fbo, GL_DEPTH, 0, &far_depth);
-                glUniformMatrix4fv(0, 1, GL_FALSE, glm::value_ptr(view_projections_[batch * kMapsPerBatch + l]));
+                glUniformMatrix4fv(0, 1, GL_FALSE, glm::value_ptr(view_projections_[first + l]));
                 casters_.draw();
             }
             detail::endDepthMaps();
@@ -312,7 +328,7 @@ public:
             // before the next batch's renders: no barrier needed around the maps.
             accumulate_.use();
             glUniform1ui(0, count_);
-            glUniform1ui(1, batch);
+            glUniform1ui(1, first);
             glUniform1ui(2, words_);
             glUniform1ui(3, layers);
             glBindTextureUnit(0, maps_.id());
@@ -320,6 +336,8 @@ public:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, masks_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, light_textures_.id());
             if (grid_.groups) glDispatchCompute(grid_.x, grid_.y, 1);
+            // The next pass may OR into the words this one wrote (per_batch_ < 32).
+            if (per_batch_ < kMapsPerBatch) glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         resolve_.use();
@@ -337,11 +355,12 @@ public:
     std::vector<float> readVisibility() const { return visibility_.download<float>(0, count_); }
     uint32_t words() const { return words_; }
     uint32_t mapSize() const { return size_; }
+    uint32_t batchLayers() const { return per_batch_; }
 
 private:
     const scene::GpuScene& casters_;
     const gl::Buffer& positions_;
-    uint32_t count_, n_, words_, size_;
+    uint32_t count_, n_, words_, size_, per_batch_;
     gl::Texture maps_;
     std::vector<gl::Framebuffer> framebuffers_;
     std::vector<glm::mat4> view_projections_;

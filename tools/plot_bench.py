@@ -9,7 +9,8 @@ BM_LutLookup ...). Each entry is one point: its time (the counter `ms` when pres
 penumbra's interleaved timing, else real_time in the JSON's time_unit) against its main error
 counter, the first present of err_visibility_rmse, err_mismatched_bits, err_mismatch, err_bits,
 err_words, else its first err_* counter in name order. Entries that time other methods in the same
-run (counters ms_<m>) add a point per method whose error is <main>_<m> or err_<m>, labelled [m].
+run (counters ms_<m>) add a point per method whose error is <main>_<m> or err_<m>, labelled [m]
+(one label for the same method's points that several entries put within 5 % of each other).
 With --benchmark_repetitions the median aggregate is plotted (else the mean, else the average of the
 iterations); entries that report an error are left out with a note. Errors of 0 are drawn on a
 dotted line below the smallest nonzero one when the error axis is logarithmic."""
@@ -106,6 +107,30 @@ def points(name, time_ms, counters):
     return out
 
 
+def near(a, b):
+    """Two positive values within 5 % of each other (equal zeros too)."""
+    if a == b:
+        return True
+    return a > 0 and b > 0 and abs(math.log(a / b)) < 0.05
+
+
+def labels(chosen, xs, ys, is_method):
+    """(text, x, y) per label. The same method timed again in several entries of a block (e.g. ours
+    beside every map size) lands on nearly one spot: those points get one label, '[m] (k entries)'."""
+    if not is_method:
+        return [(p[0], x, y) for p, x, y in zip(chosen, xs, ys)]
+    groups = []  # [method, x, y, texts]
+    for p, x, y in zip(chosen, xs, ys):
+        method = p[0][p[0].rfind("["):] if "[" in p[0] else p[0]
+        for g in groups:
+            if g[0] == method and near(g[1], x) and near(g[2], y):
+                g[3].append(p[0])
+                break
+        else:
+            groups.append([method, x, y, [p[0]]])
+    return [(g[3][0] if len(g[3]) == 1 else f"{g[0]} ({len(g[3])} entries)", g[1], g[2]) for g in groups]
+
+
 def draw(ax, block, series):
     """series: [(source_label, [points])]."""
     markers = "os^Dv<>p*h"
@@ -131,8 +156,8 @@ def draw(ax, block, series):
             kind = "methods timed in the same entry" if is_method else "entries"
             label = f"{source}: {kind}" if source else kind
             ax.scatter(xs, ys, marker=markers[(2 * s + is_method) % len(markers)], s=28, label=label, zorder=3)
-            for p, x, y in zip(chosen, xs, ys):
-                ax.annotate(p[0], (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6.5)
+            for text, x, y in labels(chosen, xs, ys, is_method):
+                ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6.5)
     if log_t:
         ax.set_xscale("log")
     if log_e:
