@@ -129,6 +129,12 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
         const std::vector<float> cpu_visible = penumbra::aaResolve(mode, states[m], f.width * f.height, samples, gpu_flags.data());
         CHECK(visible[m] == cpu_visible);
     }
+    // Edge holds every flagged pixel here: their centres are no samples (w == 0), so the hard
+    // pipeline skipped them.
+    size_t held_centres_tested = 0;
+    for (size_t i = 0; i < gpu_flags.size(); ++i)
+        held_centres_tested += gpu_flags[i] && states[0][i] != PENUMBRA_AFH_NO_SAMPLE;
+    CHECK(held_centres_tested == 0);
     // The packed edge layout under a budget B of pixels (the engine runs sampleCount(Edge, B)
     // samples): B = the flagged count holds them all (== full), B = half of it leaves the rest
     // single-sampled and counted in the status; GPU == twin either way.

@@ -444,7 +444,8 @@ TEST_CASE("resolve and bad input") {
                          penumbra::Error);
 
     // The packed edge layout: 3 pixels, 2 sub-samples, pixels 0 and 2 flagged. Every pixel held:
-    // pixel 2 (rank 1) at 3 + 2; a budget of 1 pixel: 3 + 2 samples, pixel 2 single-sampled.
+    // pixel 2 (rank 1) at 3 + 2, the held pixels' centres w == 0; a budget of 1 pixel: 3 + 2
+    // samples, pixel 2 single-sampled (its centre kept).
     {
         penumbra::AaFootprints g;
         g.pixels = 3;
@@ -459,6 +460,11 @@ TEST_CASE("resolve and bad input") {
         std::vector<vec4> pos, nrm;
         penumbra::aaSampleBuffer(g, g_flags, pos, nrm);
         REQUIRE(pos.size() == 9);
+        CHECK(pos[0] == vec4(0.0f));  // held: the lists skip the centre
+        CHECK(nrm[0] == vec4(0.0f));
+        CHECK(pos[1] == vec4(1, 0, 0, 1));
+        CHECK(nrm[1] == vec4(0, 1, 0, 0));
+        CHECK(pos[2] == vec4(0.0f));
         CHECK(pos[3] == vec4(0, 1, 0, 1));
         CHECK(pos[5] == vec4(2, 1, 0, 1));
         CHECK(pos[6] == vec4(2, 2, 0, 1));
@@ -466,6 +472,8 @@ TEST_CASE("resolve and bad input") {
         CHECK(pos[8].w == 0.0f);
         penumbra::aaSampleBuffer(g, g_flags, pos, nrm, 1);
         REQUIRE(pos.size() == 5);
+        CHECK(pos[0] == vec4(0.0f));
+        CHECK(pos[2] == vec4(2, 0, 0, 1));  // past the budget: single-sampled
         CHECK(pos[4] == vec4(0, 2, 0, 1));
         CHECK(penumbra::aaSampleCount(penumbra::AaMode::Edge, 3, 2, 1) == 5);
         CHECK(penumbra::aaSampleCount(penumbra::AaMode::Full, 3, 2, 1) == 9);

@@ -11,8 +11,9 @@
 //   produces: AaFootprints (the pixel's centre sample plus N sub-samples on the pixel's plane:
 //             aaSubSampleOffset() patterns, rotated grid by default), a 1-byte-per-pixel stencil
 //             (1 = multi-sample this pixel), the extended sample buffer the hard pipeline runs on
-//             (aaSampleBuffer: P centres, then N slots per pixel, w == 0 where a pixel keeps one
-//             sample) and the resolve (aaResolve: per pixel the mean of its samples' lit states).
+//             (aaSampleBuffer: the P centres, w == 0 where edge mode multi-samples the pixel,
+//             then N sub-samples per multi-sampled pixel) and the resolve (aaResolve: per pixel
+//             the mean of its samples' lit states).
 //   stencils: two, measured against each other:
 //     - provableEdgeStencilCpu (default): a pixel is left unflagged only when every caster
 //       triangle either blocks all of its K = N + 1 points or none of them (then their states,
@@ -268,10 +269,13 @@ inline uint64_t aaSampleCount(AaMode mode, uint32_t pixels, uint32_t samples, ui
 
 /// The extended sample buffer: [0, P) the centres, then N sub-samples per multi-sampled pixel.
 /// Full (`flags` null): pixel i's at P + i N + k. Edge (`flags`): packed, the flagged pixel of
-/// rank r (flagged pixels before it, in pixel order) at P + r N + k while r < budget; a flagged
-/// pixel past the budget keeps its centre alone (aaBudgetOverflow counts them), and the slots of
-/// ranks in [flagged count, budget) have w == 0 (the lists skip them). aaSampleCount entries.
-/// Normals: each sample carries its pixel's.
+/// rank r (flagged pixels before it, in pixel order) at P + r N + k while r < budget, and its
+/// centre slot has w == 0 (aaResolve reads only its sub-samples, so the hard pipeline skips the
+/// centre); a flagged pixel past the budget keeps its centre alone (aaBudgetOverflow counts
+/// them), and the slots of ranks in [flagged count, budget) have w == 0 (the lists skip them).
+/// Full keeps every centre (the K = N + 1 points the provable stencil reasons about, for tests
+/// and --reference). aaSampleCount entries. Normals: each sample carries its pixel's (zero where
+/// w == 0).
 inline void aaSampleBuffer(const AaFootprints& f, const uint8_t* flags, std::vector<glm::vec4>& positions,
                            std::vector<glm::vec4>& normals, uint32_t budget = kAaAllPixels) {
     const size_t p = f.pixels, n = f.samples;
@@ -285,6 +289,7 @@ inline void aaSampleBuffer(const AaFootprints& f, const uint8_t* flags, std::vec
         if (flags && !flags[i]) continue;
         const size_t slot = flags ? rank++ : i;
         if (p + slot * n >= count) continue;  // past the budget
+        if (flags) positions[i] = normals[i] = glm::vec4(0.0f);  // held: the sub-samples stand for it
         for (size_t k = 0; k < n; ++k) {
             positions[p + slot * n + k] = f.sub_samples[i * n + k];
             normals[p + slot * n + k] = f.normals[i];

@@ -1,9 +1,10 @@
 // penumbra — shadow-edge stencil: the hard pipeline's input (the twin: aaSampleBuffer). Positions
 // and normals: the P centres, then N sub-samples per multi-sampled pixel. grid.w
 // PENUMBRA_AA_MODE_FULL: pixel i's at P + i N + k. _EDGE: packed, the flagged pixel of rank r
-// (ranks, the scanned flags) at P + r N + k while r < limits.z (the budget); invocation j < budget
-// also writes w == 0 into block j when j >= the flagged count (the lists skip those). One
-// invocation per pixel.
+// (ranks, the scanned flags) at P + r N + k while r < limits.z (the budget), and its centre slot
+// gets w == 0 (the resolve reads its sub-samples only: the lists skip the centre); invocation
+// j < budget also writes w == 0 into block j when j >= the flagged count. One invocation per
+// pixel.
 #include "penumbra/shadow_edge_stencil/shadow_edge_stencil_shared.h"
 
 layout(local_size_x = PENUMBRA_AA_GROUP_SIZE) in;
@@ -21,9 +22,9 @@ void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     if (i >= p) return;
     vec4 normal = penumbraAaNormals[i];
-    penumbraAaOutPositions[i] = penumbraAaCentres[i];
-    penumbraAaOutNormals[i] = normal;
     if (penumbraAaParams.grid.w == PENUMBRA_AA_MODE_FULL) {
+        penumbraAaOutPositions[i] = penumbraAaCentres[i];
+        penumbraAaOutNormals[i] = normal;
         for (uint k = 0u; k < n; ++k) {
             penumbraAaOutPositions[p + i * n + k] = penumbraAaSubSamples[i * n + k];
             penumbraAaOutNormals[p + i * n + k] = normal;
@@ -38,7 +39,10 @@ void main() {
         }
     }
     uint rank = penumbraAaRanks[i];
-    if ((penumbraAaStencil[i] & PENUMBRA_AA_FLAG) == 0u || rank >= budget) return;
+    bool held = (penumbraAaStencil[i] & PENUMBRA_AA_FLAG) != 0u && rank < budget;
+    penumbraAaOutPositions[i] = held ? vec4(0.0) : penumbraAaCentres[i];
+    penumbraAaOutNormals[i] = held ? vec4(0.0) : normal;
+    if (!held) return;
     for (uint k = 0u; k < n; ++k) {
         penumbraAaOutPositions[p + rank * n + k] = penumbraAaSubSamples[i * n + k];
         penumbraAaOutNormals[p + rank * n + k] = normal;
