@@ -54,11 +54,17 @@ inline LastTiming& lastTiming() {
 }
 }  // namespace detail
 
+/// Whether the benchmarks' context runs on the CPU (HeadlessContext::cpuRenderer(): llvmpipe).
+inline bool cpuRenderer() {
+    static const bool cpu = glContext().cpuRenderer();
+    return cpu;
+}
+
 /// GPU seconds of `f`, the one timing method of every GL benchmark: a GL_TIME_ELAPSED query
-/// around it where the driver really measures the region (the query reports between 5% and 100%
-/// of the wall time between the glFinish()es around it: GPU time lies inside that window), else
-/// that wall time. llvmpipe answers timer queries with 1 ns or with values that are no
-/// durations; it runs on the CPU, so there the finished wall time is the execution time.
+/// around it where the driver really measures the region (a GPU renderer, and the query reports
+/// between 5% and 100% of the wall time between the glFinish()es around it: GPU time lies inside
+/// that window), else that wall time. CPU renderers (cpuRenderer(): llvmpipe) always use the wall
+/// time: it is their execution time, and their queries miss work (HeadlessContext::cpuRenderer()).
 /// timerCounter() says which method the last call used.
 template <typename F>
 double timeGpu(F&& f) {
@@ -67,17 +73,18 @@ double timeGpu(F&& f) {
         glCreateQueries(GL_TIME_ELAPSED, 1, &q);
         return q;
     }();
+    const bool use_query = !cpuRenderer();
     glFinish();
     const auto start = std::chrono::steady_clock::now();
-    glBeginQuery(GL_TIME_ELAPSED, query);
+    if (use_query) glBeginQuery(GL_TIME_ELAPSED, query);
     f();
-    glEndQuery(GL_TIME_ELAPSED);
+    if (use_query) glEndQuery(GL_TIME_ELAPSED);
     glFinish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     GLuint64 ns = 0;
-    glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+    if (use_query) glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
     const double measured = double(ns) * 1e-9;
-    detail::timeElapsedMeasures() = measured >= 0.05 * wall && measured <= 1.02 * wall;
+    detail::timeElapsedMeasures() = use_query && measured >= 0.05 * wall && measured <= 1.02 * wall;
     detail::lastTiming() = {wall, measured};
     ++(detail::timeElapsedMeasures() ? detail::timerUse().query : detail::timerUse().wall);
     return detail::timeElapsedMeasures() ? measured : wall;
