@@ -227,8 +227,9 @@ public:
     /// scan), the first `budget` of them, whose centre slots get w == 0 (the resolve reads their
     /// sub-samples only, so the lists skip the centres); the engine runs the hard pipeline on
     /// sampleCount(Edge, budget) samples, so a budget near the flagged count (e.g. the last
-    /// frame's plus a margin) skips the empty slots. Flagged pixels past it stay single-sampled (resolve() counts them:
-    /// readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]); the default holds every pixel.
+    /// frame's plus a margin) skips the empty slots. Flagged pixels past it stay single-sampled
+    /// (resolve() counts them: readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]); the default
+    /// holds every pixel.
     Status writeSampleBuffer(AaMode mode, const BufferRange& positions, const BufferRange& normals,
                              uint32_t budget = kAaAllPixels) {
         if (!ran_) return Status::NotReserved;
