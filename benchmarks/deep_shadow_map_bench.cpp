@@ -130,8 +130,6 @@ double msSince(std::chrono::steady_clock::time_point start) {
 
 // ---- scene, light, setup (reusable by GPU entries) ----
 
-/// Every mesh of the scene except the ground plane, concatenated (indices offset).
-
 struct DsmBenchLight {
     penumbra::DsmLight light;
     glm::vec3 eye{0.0f};     ///< the light's position (the eye of `light.view`)
