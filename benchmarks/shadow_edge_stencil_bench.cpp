@@ -25,9 +25,10 @@
 // then per iteration one call each, interleaved with a rotating start; medians):
 //   stencil    the provable stencil's run() (sub-samples, footprint lists, light pass, bits).
 //   edge_hard  writeSampleBuffer(Edge, budget) + AliasFreeHardShadows::run on sampleCount(Edge,
-//              budget) = P + budget N samples (the flagged pixels' sub-samples packed after the
-//              centres; budget = the frame's flagged count, counted in an untimed run: an engine
-//              would take the last frame's plus a margin) + resolve(Edge, budget).
+//              budget) = P + budget N slots (the flagged pixels' sub-samples packed after the P
+//              centre slots, which are all empty: the stencil decided the unflagged pixels,
+//              AaUnflagged::Proven; budget = the frame's flagged count, counted in an untimed
+//              run: an engine would take the last frame's plus a margin) + resolve(Edge, budget).
 //   full       writeSampleBuffer(Full) + the hard run (every pixel's sub-samples) + resolve(Full).
 //   off        the hard run on the P centres (the G-buffer itself) + resolve(Off).
 //   chebyshev  the Chebyshev stencil's run() (sub-samples, the moment map and its levels, the test).

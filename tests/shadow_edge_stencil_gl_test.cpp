@@ -103,9 +103,14 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
     REQUIRE(stencil.writeSampleBuffer(penumbra::AaMode::Edge, whole(edge_pos), whole(edge_nrm)) == penumbra::Status::Ok);
     REQUIRE(stencil.writeSampleBuffer(penumbra::AaMode::Full, whole(full_pos), whole(full_nrm)) == penumbra::Status::Ok);
     std::vector<vec4> cpu_pos, cpu_nrm;
-    std::vector<uint8_t> gpu_flags(gpu_words.size());
-    for (size_t i = 0; i < gpu_words.size(); ++i) gpu_flags[i] = (gpu_words[i] & PENUMBRA_AA_FLAG) ? 1 : 0;
-    penumbra::aaSampleBuffer(gpu_f, gpu_flags.data(), cpu_pos, cpu_nrm);
+    std::vector<uint8_t> gpu_flags(gpu_words.size()), gpu_lit(gpu_words.size());
+    for (size_t i = 0; i < gpu_words.size(); ++i) {
+        gpu_flags[i] = (gpu_words[i] & PENUMBRA_AA_FLAG) ? 1 : 0;
+        gpu_lit[i] = (gpu_words[i] & PENUMBRA_AA_LIT) ? 1 : 0;
+    }
+    // The provable stencil's edge layout: unflagged pixels are no samples (AaUnflagged::Proven).
+    const penumbra::AaUnflagged proven = penumbra::AaUnflagged::Proven;
+    penumbra::aaSampleBuffer(gpu_f, gpu_flags.data(), cpu_pos, cpu_nrm, penumbra::kAaAllPixels, proven);
     CHECK(std::memcmp(edge_pos.download<vec4>().data(), cpu_pos.data(), cpu_pos.size() * sizeof(vec4)) == 0);
     CHECK(std::memcmp(edge_nrm.download<vec4>().data(), cpu_nrm.data(), cpu_nrm.size() * sizeof(vec4)) == 0);
 
@@ -126,15 +131,15 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
         const penumbra::AaMode mode = m == 0 ? penumbra::AaMode::Edge : penumbra::AaMode::Full;
         REQUIRE(stencil.resolve(mode, {pipeline.stateBuffer().id(), 0, 4ull * count}, whole(visible_buffer)) == penumbra::Status::Ok);
         visible[m] = visible_buffer.download<float>();
-        const std::vector<float> cpu_visible = penumbra::aaResolve(mode, states[m], f.width * f.height, samples, gpu_flags.data());
+        const std::vector<float> cpu_visible = penumbra::aaResolve(mode, states[m], f.width * f.height, samples, gpu_flags.data(),
+                                                                   penumbra::kAaAllPixels, gpu_lit.data());
         CHECK(visible[m] == cpu_visible);
     }
-    // Edge holds every flagged pixel here: their centres are no samples (w == 0), so the hard
-    // pipeline skipped them.
-    size_t held_centres_tested = 0;
-    for (size_t i = 0; i < gpu_flags.size(); ++i)
-        held_centres_tested += gpu_flags[i] && states[0][i] != PENUMBRA_AFH_NO_SAMPLE;
-    CHECK(held_centres_tested == 0);
+    // Edge holds every flagged pixel here, and the stencil decided the others: no centre is a
+    // sample (w == 0), so the hard pipeline tested only the flagged pixels' sub-samples.
+    size_t centres_tested = 0;
+    for (size_t i = 0; i < gpu_flags.size(); ++i) centres_tested += states[0][i] != PENUMBRA_AFH_NO_SAMPLE;
+    CHECK(centres_tested == 0);
     // The packed edge layout under a budget B of pixels (the engine runs sampleCount(Edge, B)
     // samples): B = the flagged count holds them all (== full), B = half of it leaves the rest
     // single-sampled and counted in the status; GPU == twin either way.
@@ -149,7 +154,7 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
             REQUIRE(stencil.writeSampleBuffer(penumbra::AaMode::Edge, whole(edge_pos), whole(edge_nrm), budget) ==
                     penumbra::Status::Ok);
             std::vector<vec4> budget_pos, budget_nrm;
-            penumbra::aaSampleBuffer(gpu_f, gpu_flags.data(), budget_pos, budget_nrm, budget);
+            penumbra::aaSampleBuffer(gpu_f, gpu_flags.data(), budget_pos, budget_nrm, budget, proven);
             REQUIRE(budget_pos.size() == budget_count);
             CHECK(std::memcmp(edge_pos.download<vec4>(0, budget_count).data(), budget_pos.data(), budget_count * sizeof(vec4)) == 0);
             CHECK(std::memcmp(edge_nrm.download<vec4>(0, budget_count).data(), budget_nrm.data(), budget_count * sizeof(vec4)) == 0);
@@ -160,7 +165,8 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
                                     whole(visible_buffer), budget) == penumbra::Status::Ok);
             const std::vector<float> budget_visible = visible_buffer.download<float>();
             CHECK(budget_visible ==
-                  penumbra::aaResolve(penumbra::AaMode::Edge, budget_states, pixels, samples, gpu_flags.data(), budget));
+                  penumbra::aaResolve(penumbra::AaMode::Edge, budget_states, pixels, samples, gpu_flags.data(), budget,
+                                      gpu_lit.data()));
             CHECK(stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW] ==
                   penumbra::aaBudgetOverflow(gpu_flags.data(), pixels, budget));
             if (budget == flagged_count) CHECK(budget_visible == visible[1]);

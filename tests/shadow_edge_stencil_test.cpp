@@ -101,7 +101,7 @@ void castCentres(const Soup& s, const View& v, std::vector<vec4>& centres, std::
 
 struct Outcome {
     size_t surface = 0, flagged = 0, edge_truth = 0, missed_exact = 0, missed_oracle = 0, chebyshev_flagged = 0,
-           chebyshev_missed = 0, inner_flagged = 0, inner_missed = 0, resolve_mismatch = 0, shadowed_mismatch = 0;
+           chebyshev_missed = 0, inner_flagged = 0, inner_missed = 0, resolve_mismatch = 0, verdict_mismatch = 0;
 };
 
 /// Everything for one (scene, view, light): the stencils, the hard pipeline's CPU twin on the full
@@ -126,15 +126,24 @@ Outcome runCase(const Soup& soup, const View& view, const vec4& light, const pen
     o.max_list_blocks = 64;
     const penumbra::ProvableStencilCpu stencil = penumbra::provableEdgeStencilCpu(o, lists_light, f, soup.casters());
 
-    std::vector<vec4> full_pos, full_nrm, edge_pos, edge_nrm;
+    // Edge two ways: unflagged pixels' centres sampled (what the Chebyshev stencil needs) and
+    // decided by the provable stencil's verdicts alone (AaUnflagged::Proven, the GPU default).
+    std::vector<vec4> full_pos, full_nrm, edge_pos, edge_nrm, proven_pos, proven_nrm;
     penumbra::aaSampleBuffer(f, nullptr, full_pos, full_nrm);
     penumbra::aaSampleBuffer(f, stencil.flags.data(), edge_pos, edge_nrm);
+    penumbra::aaSampleBuffer(f, stencil.flags.data(), proven_pos, proven_nrm, penumbra::kAaAllPixels,
+                             penumbra::AaUnflagged::Proven);
     const auto full = penumbra::aliasFreeHardCpu(o, lists_light, full_pos.data(), full_nrm.data(), uint32_t(full_pos.size()),
                                                  soup.casters());
     const auto edge = penumbra::aliasFreeHardCpu(o, lists_light, edge_pos.data(), edge_nrm.data(), uint32_t(edge_pos.size()),
                                                  soup.casters());
     const std::vector<float> r_full = penumbra::aaResolve(penumbra::AaMode::Full, full, f.pixels, f.samples);
     const std::vector<float> r_edge = penumbra::aaResolve(penumbra::AaMode::Edge, edge, f.pixels, f.samples, stencil.flags.data());
+    const auto proven = penumbra::aliasFreeHardCpu(o, lists_light, proven_pos.data(), proven_nrm.data(),
+                                                   uint32_t(proven_pos.size()), soup.casters());
+    const std::vector<float> r_proven = penumbra::aaResolve(penumbra::AaMode::Edge, proven, f.pixels, f.samples,
+                                                            stencil.flags.data(), penumbra::kAaAllPixels, stencil.lit.data());
+    for (uint32_t i = 0; i < f.pixels; ++i) out.resolve_mismatch += r_full[i] != r_proven[i];  // background pixels too
 
     // The oracle on every point (same floats, same coplanar epsilon).
     penumbra::reference::VisibilityOracle oracle(soup.positions, soup.indices);
@@ -178,7 +187,9 @@ Outcome runCase(const Soup& soup, const View& view, const vec4& light, const pen
         out.inner_flagged += inner[i];
         out.inner_missed += !agree && !inner[i];
         out.resolve_mismatch += r_full[i] != r_edge[i];
-        if (!stencil.flags[i] && agree) out.shadowed_mismatch += stencil.shadowed[i] != (full[i] != PENUMBRA_AFH_LIT);
+        // An unflagged pixel's verdict is exactly one of lit / shadowed, and its points' state.
+        if (!stencil.flags[i] && agree)
+            out.verdict_mismatch += stencil.shadowed[i] == stencil.lit[i] || stencil.lit[i] != (full[i] == PENUMBRA_AFH_LIT);
     }
     return out;
 }
@@ -205,7 +216,7 @@ void checkSound(const Outcome& o) {
     CHECK(o.missed_exact == 0);
     CHECK(o.missed_oracle == 0);
     CHECK(o.resolve_mismatch == 0);
-    CHECK(o.shadowed_mismatch == 0);
+    CHECK(o.verdict_mismatch == 0);
     CHECK(o.flagged >= o.edge_truth);
 }
 
@@ -486,6 +497,30 @@ TEST_CASE("resolve and bad input") {
         CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, budget_one, 3, 2, g_flags, 1) == std::vector<float>{0.5f, 1.0f, 1.0f});
         CHECK_THROWS_WITH_AS(penumbra::aaResolve(penumbra::AaMode::Edge, budget_one, 3, 2, g_flags), doctest::Contains("5 states"),
                              penumbra::Error);
+
+        // AaUnflagged::Proven: the unflagged pixel 1 is no sample either, the resolve takes the
+        // stencil's verdict (lit or not) whatever its slot says; flagged pixels as before.
+        penumbra::aaSampleBuffer(g, g_flags, pos, nrm, penumbra::kAaAllPixels, penumbra::AaUnflagged::Proven);
+        REQUIRE(pos.size() == 9);
+        CHECK(pos[0] == vec4(0.0f));
+        CHECK(pos[1] == vec4(0.0f));
+        CHECK(nrm[1] == vec4(0.0f));
+        CHECK(pos[3] == vec4(0, 1, 0, 1));
+        CHECK(pos[6] == vec4(2, 2, 0, 1));
+        penumbra::aaSampleBuffer(g, g_flags, pos, nrm, 1, penumbra::AaUnflagged::Proven);
+        REQUIRE(pos.size() == 5);
+        CHECK(pos[1] == vec4(0.0f));
+        CHECK(pos[2] == vec4(2, 0, 0, 1));  // flagged past the budget: its centre is still a sample
+        const uint32_t N = PENUMBRA_AFH_NO_SAMPLE;
+        const uint8_t dark[3] = {0, 0, 0}, lit_one[3] = {0, 1, 0};
+        const std::vector<uint32_t> proven = {N, N, N, L, S, S, L, S, S};
+        CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, proven, 3, 2, g_flags, penumbra::kAaAllPixels, dark) ==
+              std::vector<float>{0.5f, 0.0f, 0.5f});
+        CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, proven, 3, 2, g_flags, penumbra::kAaAllPixels, lit_one) ==
+              std::vector<float>{0.5f, 1.0f, 0.5f});
+        const std::vector<uint32_t> proven_budget_one = {N, N, L, L, S};
+        CHECK(penumbra::aaResolve(penumbra::AaMode::Edge, proven_budget_one, 3, 2, g_flags, 1, lit_one) ==
+              std::vector<float>{0.5f, 1.0f, 1.0f});
     }
 
     penumbra::AaFootprints f;

@@ -11,9 +11,10 @@
 //   produces: AaFootprints (the pixel's centre sample plus N sub-samples on the pixel's plane:
 //             aaSubSampleOffset() patterns, rotated grid by default), a 1-byte-per-pixel stencil
 //             (1 = multi-sample this pixel), the extended sample buffer the hard pipeline runs on
-//             (aaSampleBuffer: the P centres, w == 0 where edge mode multi-samples the pixel,
-//             then N sub-samples per multi-sampled pixel) and the resolve (aaResolve: per pixel
-//             the mean of its samples' lit states).
+//             (aaSampleBuffer: the P centres, w == 0 where edge mode multi-samples the pixel or,
+//             AaUnflagged::Proven, where the provable stencil decided it; then N sub-samples per
+//             multi-sampled pixel) and the resolve (aaResolve: per pixel the mean of its samples'
+//             lit states, or the provable stencil's verdict).
 //   stencils: two, measured against each other:
 //     - provableEdgeStencilCpu (default): a pixel is left unflagged only when every caster
 //       triangle either blocks all of its K = N + 1 points or none of them (then their states,
@@ -23,8 +24,9 @@
 //       lights) decides most pairs with 4-5 dot products; undecided pairs run the hard pipeline's
 //       exact test (afhBlocks<double>) on the K points. A pixel some triangle covers entirely is
 //       fully shadowed whatever else splits it (no flag). This is a footprint-level irregular
-//       z-buffer pass: it also yields the unflagged pixels' state, so it can replace the
-//       single-sample pass.
+//       z-buffer pass: it also yields the unflagged pixels' states (lit, shadowed), so edge mode
+//       needs no sample of them (AaUnflagged::Proven: the hard pipeline runs on the flagged
+//       pixels' sub-samples alone).
 //     - chebyshevEdgeStencilCpu (galoppo2010 Listing 1.6.1): a conservative moment map (each light
 //       texel holds the minimum caster depth over its area — conservative raster, Fig. 1.6.8 — as
 //       E(x), E(x^2), mip-mapped) read at the level the pixel's light-space footprint fits; the
@@ -267,29 +269,45 @@ inline uint64_t aaSampleCount(AaMode mode, uint32_t pixels, uint32_t samples, ui
     return uint64_t(pixels) + held * samples;
 }
 
+/// Edge mode's unflagged pixels: their centre sample decides each (any stencil), or the provable
+/// stencil's verdict does (ProvableStencilCpu::lit / PENUMBRA_AA_LIT, else dark) and they are no
+/// sample at all: the hard pipeline then runs on the flagged pixels' sub-samples alone.
+enum class AaUnflagged { Sampled, Proven };
+
 /// The extended sample buffer: [0, P) the centres, then N sub-samples per multi-sampled pixel.
 /// Full (`flags` null): pixel i's at P + i N + k. Edge (`flags`): packed, the flagged pixel of
 /// rank r (flagged pixels before it, in pixel order) at P + r N + k while r < budget, and its
 /// centre slot has w == 0 (aaResolve reads only its sub-samples, so the hard pipeline skips the
 /// centre); a flagged pixel past the budget keeps its centre alone (aaBudgetOverflow counts
 /// them), and the slots of ranks in [flagged count, budget) have w == 0 (the lists skip them).
-/// Full keeps every centre (the K = N + 1 points the provable stencil reasons about, for tests
-/// and --reference). aaSampleCount entries. Normals: each sample carries its pixel's (zero where
+/// AaUnflagged::Proven (edge only) also gives the unflagged pixels' centre slots w == 0. Full
+/// keeps every centre (the K = N + 1 points the provable stencil reasons about, for tests and
+/// --reference). aaSampleCount entries. Normals: each sample carries its pixel's (zero where
 /// w == 0).
 inline void aaSampleBuffer(const AaFootprints& f, const uint8_t* flags, std::vector<glm::vec4>& positions,
-                           std::vector<glm::vec4>& normals, uint32_t budget = kAaAllPixels) {
+                           std::vector<glm::vec4>& normals, uint32_t budget = kAaAllPixels,
+                           AaUnflagged unflagged = AaUnflagged::Sampled) {
     const size_t p = f.pixels, n = f.samples;
     const size_t count = aaSampleCount(flags ? AaMode::Edge : AaMode::Full, f.pixels, f.samples, budget);
+    const bool proven = flags && unflagged == AaUnflagged::Proven;
     positions.assign(count, glm::vec4(0.0f));
     normals.assign(count, glm::vec4(0.0f));
     size_t rank = 0;
     for (size_t i = 0; i < p; ++i) {
-        positions[i] = f.centres[i];
-        normals[i] = f.normals[i];
-        if (flags && !flags[i]) continue;
+        if (flags && !flags[i]) {
+            if (!proven) {
+                positions[i] = f.centres[i];
+                normals[i] = f.normals[i];
+            }
+            continue;
+        }
         const size_t slot = flags ? rank++ : i;
-        if (p + slot * n >= count) continue;  // past the budget
-        if (flags) positions[i] = normals[i] = glm::vec4(0.0f);  // held: the sub-samples stand for it
+        const bool held = p + slot * n < count;
+        if (!flags || !held) {  // Full, or past the budget: the centre is a sample
+            positions[i] = f.centres[i];
+            normals[i] = f.normals[i];
+        }
+        if (!held) continue;
         for (size_t k = 0; k < n; ++k) {
             positions[p + slot * n + k] = f.sub_samples[i * n + k];
             normals[p + slot * n + k] = f.normals[i];
@@ -307,16 +325,23 @@ inline uint32_t aaBudgetOverflow(const uint8_t* flags, uint32_t pixels, uint32_t
 /// Per pixel: the fraction of its samples the hard pipeline found lit (PENUMBRA_AFH_LIT), from
 /// states of aaSampleBuffer's layout (the same budget). Off: the centre's state; Full: the mean of
 /// the N sub-samples; Edge: the mean where the pixel is flagged and within the budget, else the
-/// centre's state. N a power of two makes the means exact, so Edge and Full agree bit for bit
-/// wherever their sample states agree.
+/// centre's state — or, given `proven_lit` (ProvableStencilCpu::lit, the layout of
+/// AaUnflagged::Proven), an unflagged pixel's verdict: 1 where lit, else 0 (shadowed, all
+/// back-facing or no surface, as its samples would say). N a power of two makes the means exact,
+/// so Edge and Full agree bit for bit wherever their sample states agree.
 inline std::vector<float> aaResolve(AaMode mode, const std::vector<uint32_t>& states, uint32_t pixels, uint32_t samples,
-                                    const uint8_t* flags = nullptr, uint32_t budget = kAaAllPixels) {
+                                    const uint8_t* flags = nullptr, uint32_t budget = kAaAllPixels,
+                                    const uint8_t* proven_lit = nullptr) {
     PENUMBRA_CHECK(states.size() >= aaSampleCount(mode, pixels, samples, budget), "penumbra::aaResolve: ", states.size(),
                    " states for ", pixels, " pixels x ", samples, " samples");
     PENUMBRA_CHECK(mode != AaMode::Edge || flags, "penumbra::aaResolve: edge mode needs the stencil");
     std::vector<float> lit(pixels);
     uint32_t rank = 0;
     for (uint32_t i = 0; i < pixels; ++i) {
+        if (mode == AaMode::Edge && proven_lit && !flags[i]) {
+            lit[i] = proven_lit[i] ? 1.0f : 0.0f;
+            continue;
+        }
         const bool multi = mode == AaMode::Full || (mode == AaMode::Edge && flags[i] && rank++ < budget);
         if (!multi) {
             lit[i] = states[i] == PENUMBRA_AFH_LIT ? 1.0f : 0.0f;
@@ -347,16 +372,18 @@ struct ProvableStencilOptions {
 struct ProvableStencilCpu {
     std::vector<uint8_t> flags;     ///< 1 = multi-sample (some triangle splits the footprint, none covers it)
     std::vector<uint8_t> shadowed;  ///< unflagged pixels: 1 = every point shadowed (a cover or all back-facing)
+    std::vector<uint8_t> lit;       ///< unflagged pixels: 1 = every point lit (classified; no triangle blocks any point)
     uint64_t pairs = 0;             ///< (footprint, triangle) pairs classified
     uint64_t sphere_decided = 0;    ///< ... decided by the bounding-sphere test alone
     uint64_t exact_tests = 0;       ///< exact point tests of the undecided pairs
     uint64_t outside = 0;           ///< footprints with a point outside the light frustum (flagged)
     uint64_t mixed_facing = 0;      ///< footprints whose points disagree on facing the light (flagged)
     uint64_t over_limits = 0;       ///< footprints flagged for a box over max_footprint_texels or an over-long list
-    /// The GPU's stencil word per pixel (PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED).
+    /// The GPU's stencil word per pixel (PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED | PENUMBRA_AA_LIT).
     std::vector<uint32_t> words() const {
         std::vector<uint32_t> w(flags.size());
-        for (size_t i = 0; i < w.size(); ++i) w[i] = (flags[i] ? PENUMBRA_AA_FLAG : 0u) | (shadowed[i] ? PENUMBRA_AA_SHADOWED : 0u);
+        for (size_t i = 0; i < w.size(); ++i)
+            w[i] = (flags[i] ? PENUMBRA_AA_FLAG : 0u) | (shadowed[i] ? PENUMBRA_AA_SHADOWED : 0u) | (lit[i] ? PENUMBRA_AA_LIT : 0u);
         return w;
     }
 };
@@ -482,6 +509,7 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
     ProvableStencilCpu out;
     out.flags.assign(f.pixels, 0);
     out.shadowed.assign(f.pixels, 0);
+    out.lit.assign(f.pixels, 0);
     const uint32_t gw = options.grid_width, gh = options.grid_height;
     const uint32_t k_points = f.samples + 1;
     const bool point = light.light.w != 0.0f;
@@ -618,6 +646,7 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
         if (!active[i]) continue;
         if (covered[i]) out.shadowed[i] = 1;
         else if (split[i]) out.flags[i] = 1;
+        else out.lit[i] = 1;
     }
     return out;
 }

@@ -8,10 +8,12 @@
 //             positions, w == 0: none) and face normals (vec4) as buffer ranges, P = W_view x
 //             H_view each; casters as a vec3 float vertex range + uint32 index range (GL_TRIANGLES).
 //   produces: subSamples() (vec4 [P * N]: pixel i's sub-sample k at i N + k), stencil() (uint [P]:
-//             PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED), then on request the hard pipeline's input
-//             (writeSampleBuffer: positions + normals [sampleCount(mode, budget)], the layout of
-//             aaSampleBuffer: edge mode packs the flagged pixels' sub-samples, ranked by a scan, up
-//             to a budget of pixels) and per-pixel visibility from the hard pipeline's states (resolve).
+//             PENUMBRA_AA_FLAG | PENUMBRA_AA_SHADOWED | PENUMBRA_AA_LIT), then on request the hard
+//             pipeline's input (writeSampleBuffer: positions + normals [sampleCount(mode, budget)],
+//             the layout of aaSampleBuffer: edge mode packs the flagged pixels' sub-samples, ranked
+//             by a scan, up to a budget of pixels; with the provable stencil the pixels it did not
+//             flag are no samples, AaUnflagged::Proven) and per-pixel visibility from the hard
+//             pipeline's states and, for those pixels, the stencil's verdict (resolve).
 //   per frame: run() — (1) sub-samples + facing, (2) footprint boxes and counts per light texel,
 //             (3) exclusive scan, (4) scatter, (5) the footprint light pass: every caster drawn with
 //             the conservative emitter into an attachment-less grid; each fragment classifies its
@@ -225,7 +227,10 @@ public:
     /// 16 sampleCount(mode, budget) bytes each, 16-byte aligned (aaSampleBuffer's layout). Full:
     /// every pixel's sub-samples. Edge: the flagged pixels' packed in pixel order (ranked by a
     /// scan), the first `budget` of them, whose centre slots get w == 0 (the resolve reads their
-    /// sub-samples only, so the lists skip the centres); the engine runs the hard pipeline on
+    /// sub-samples only, so the lists skip the centres); with the provable stencil (the default
+    /// kind) so do the unflagged pixels' (their states are the stencil's proven verdicts,
+    /// AaUnflagged::Proven): the hard pipeline tests the flagged pixels' sub-samples alone. The
+    /// Chebyshev kind keeps them (its claims are not proofs). The engine runs the hard pipeline on
     /// sampleCount(Edge, budget) samples, so a budget near the flagged count (e.g. the last
     /// frame's plus a margin) skips the empty slots. Flagged pixels past it stay single-sampled
     /// (resolve() counts them: readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]); the default
@@ -254,7 +259,8 @@ public:
 
     /// Per-pixel visibility (float [P]) from the hard pipeline's states, sampleCount(mode, budget)
     /// of them in writeSampleBuffer's layout (Off: the P centres'); Edge takes the budget (and the
-    /// ranks) of the last writeSampleBuffer(Edge) since run() (NotReserved without one).
+    /// ranks) of the last writeSampleBuffer(Edge) since run() (NotReserved without one); with the
+    /// provable stencil, an unflagged pixel's value is its verdict (1 where PENUMBRA_AA_LIT, else 0).
     Status resolve(AaMode mode, const BufferRange& states, const BufferRange& visible, uint32_t budget = kAaAllPixels) {
         if (mode != AaMode::Off && !ran_) return Status::NotReserved;
         if (mode == AaMode::Edge && !ranked_) return Status::NotReserved;
@@ -335,7 +341,9 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     void setMode(AaMode mode, uint32_t budget) {
-        params_staging_.grid.w = mode == AaMode::Off ? PENUMBRA_AA_MODE_OFF : mode == AaMode::Edge ? PENUMBRA_AA_MODE_EDGE : PENUMBRA_AA_MODE_FULL;
+        // Edge with the provable stencil: unflagged pixels are decided by its word (no sample).
+        const uint32_t edge = kind_ == AaStencilKind::Provable ? PENUMBRA_AA_MODE_EDGE_PROVEN : PENUMBRA_AA_MODE_EDGE;
+        params_staging_.grid.w = mode == AaMode::Off ? PENUMBRA_AA_MODE_OFF : mode == AaMode::Edge ? edge : PENUMBRA_AA_MODE_FULL;
         params_staging_.limits.z = std::min(budget, pixels_);
         glNamedBufferSubData(params_.id(), offsetof(AaParams, grid), sizeof(glm::uvec4), &params_staging_.grid);
         glNamedBufferSubData(params_.id(), offsetof(AaParams, limits), sizeof(glm::uvec4), &params_staging_.limits);

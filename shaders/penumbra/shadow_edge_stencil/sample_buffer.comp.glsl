@@ -3,8 +3,9 @@
 // PENUMBRA_AA_MODE_FULL: pixel i's at P + i N + k. _EDGE: packed, the flagged pixel of rank r
 // (ranks, the scanned flags) at P + r N + k while r < limits.z (the budget), and its centre slot
 // gets w == 0 (the resolve reads its sub-samples only: the lists skip the centre); invocation
-// j < budget also writes w == 0 into block j when j >= the flagged count. One invocation per
-// pixel.
+// j < budget also writes w == 0 into block j when j >= the flagged count. _EDGE_PROVEN: the same,
+// and the unflagged pixels' centre slots get w == 0 too (the resolve takes their states from the
+// provable stencil's word). One invocation per pixel.
 #include "penumbra/shadow_edge_stencil/shadow_edge_stencil_shared.h"
 
 layout(local_size_x = PENUMBRA_AA_GROUP_SIZE) in;
@@ -39,9 +40,10 @@ void main() {
         }
     }
     uint rank = penumbraAaRanks[i];
-    bool held = (penumbraAaStencil[i] & PENUMBRA_AA_FLAG) != 0u && rank < budget;
-    penumbraAaOutPositions[i] = held ? vec4(0.0) : penumbraAaCentres[i];
-    penumbraAaOutNormals[i] = held ? vec4(0.0) : normal;
+    bool flag = (penumbraAaStencil[i] & PENUMBRA_AA_FLAG) != 0u, held = flag && rank < budget;
+    bool sampled = !held && (flag || penumbraAaParams.grid.w != PENUMBRA_AA_MODE_EDGE_PROVEN);
+    penumbraAaOutPositions[i] = sampled ? penumbraAaCentres[i] : vec4(0.0);
+    penumbraAaOutNormals[i] = sampled ? normal : vec4(0.0);
     if (!held) return;
     for (uint k = 0u; k < n; ++k) {
         penumbraAaOutPositions[p + rank * n + k] = penumbraAaSubSamples[i * n + k];

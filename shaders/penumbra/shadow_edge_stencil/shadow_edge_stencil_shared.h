@@ -12,12 +12,13 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_MAX_SAMPLES 64
 #define PENUMBRA_AA_GROUP_SIZE 64
 
-// The stencil word per pixel (stencil() after a run: only FLAG and SHADOWED remain).
+// The stencil word per pixel (stencil() after a run: only FLAG, SHADOWED and LIT remain).
 #define PENUMBRA_AA_FLAG 1u         // multi-sample this pixel
 #define PENUMBRA_AA_SHADOWED 2u     // unflagged and every point shadowed (a cover, or all light-back-facing)
 #define PENUMBRA_AA_ACTIVE 4u       // internal: classified against the casters
 #define PENUMBRA_AA_SPLIT 8u        // internal: some triangle blocks some but not all of its points
 #define PENUMBRA_AA_COVERED 16u     // internal: some triangle blocks all of its points
+#define PENUMBRA_AA_LIT 32u         // unflagged and every point lit (classified: no triangle blocks any point)
 
 // Uniform buffer: the conservative emitter's block is binding 0, this block binding 1.
 #define PENUMBRA_AA_BINDING_PARAMS 1
@@ -53,6 +54,7 @@ namespace penumbra::shared {
 #define PENUMBRA_AA_MODE_OFF 0u
 #define PENUMBRA_AA_MODE_EDGE 1u
 #define PENUMBRA_AA_MODE_FULL 2u
+#define PENUMBRA_AA_MODE_EDGE_PROVEN 3u  // edge, unflagged pixels' states from the provable stencil's word
 
 /// One pixel's footprint as the light pass reads it (64 bytes, std430).
 struct PenumbraAaFootprint {
