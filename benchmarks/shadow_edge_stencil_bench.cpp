@@ -16,10 +16,13 @@
 // centres and sub-samples, grown by kLightBoxSlack of its diagonal on every side. Every method
 // uses that light; the hard pipeline refits it (sintorn2008 §4.3) from there.
 // Objects: AliasFreeHardOptions with grid = W x W and defaults otherwise (exact, no caster culling:
-// what ShadowEdgeStencil requires); one AliasFreeHardShadows (reserved for P (1 + N) samples), one
-// provable ShadowEdgeStencil, one Chebyshev ShadowEdgeStencil (ChebyshevStencilOptions defaults:
-// galoppo2010's threshold 1%), both with that options object. The casters: every triangle of the
-// scene, drawn for the hard pipeline's open class (no class is culled).
+// what ShadowEdgeStencil requires); one provable ShadowEdgeStencil, one Chebyshev ShadowEdgeStencil
+// (ChebyshevStencilOptions defaults: galoppo2010's threshold 1%), both with that options object;
+// one AliasFreeHardShadows per mode, each with those options on the square light grid its sample
+// count calls for (afhGridSideForSamples: off P samples, W here; full P (1 + N); edge budget N,
+// the flagged pixels' sub-samples), so no method is timed on a grid sized for another's samples.
+// The casters: every triangle of the scene, drawn for the hard pipeline's open class (no class is
+// culled).
 //
 // Methods, all timed in the same entry (penumbra::bench::timeInterleaved: one warm-up call each,
 // then per iteration one call each, interleaved with a rotating start; medians):
@@ -58,6 +61,7 @@
 //   pairs, exact_tests, list_overflow   the provable stencil's readStatus() (PENUMBRA_AA_STATUS_PAIRS,
 //                      _EXACT, _LIST_OVERFLOW: overflowing pixels are flagged, safe)
 //   budget, err_budget_overflow  the edge layout's budget and the flagged pixels past it (0)
+//   grid_off, grid_edge, grid_full   each mode's light grid side
 //   untested_full      samples of the full run the hard pipeline left PENUMBRA_AFH_UNTESTED (outside
 //                      its frustum or past its list blocks; 0 expected)
 // Read-backs happen after the timed runs: one more untimed full and edge run give the visibilities.
@@ -176,13 +180,23 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         inner_options.inner_shadow_proof = true;
         gl::ShadowEdgeStencil chebyshev_inner(f.size, f.size, options, pattern, {}, 1u, penumbra::ShaderLibrary::embedded(),
                                               gl::AaStencilKind::Chebyshev, inner_options);
-        penumbra::AliasFreeHardShadows hard(options);
-        hard.reserve(extended);
+        // One hard pipeline per mode, each on the grid its sample count calls for
+        // (afhGridSideForSamples: one texel per sample, as sintorn2008's view-sized grid); edge's
+        // follows the budget, below.
+        auto hardOptions = [&](uint64_t sample_count) {
+            penumbra::AliasFreeHardOptions o = options;
+            o.grid_width = o.grid_height = penumbra::afhGridSideForSamples(sample_count);
+            return o;
+        };
+        const penumbra::AliasFreeHardOptions off_options = hardOptions(p), full_options = hardOptions(extended);
+        penumbra::AliasFreeHardShadows hard_off(off_options), hard_full(full_options);
+        hard_off.reserve(p);
+        hard_full.reserve(extended);
         gl::Buffer sample_pos(stencil.sampleBufferBytes()), sample_nrm(stencil.sampleBufferBytes()), visible(4ull * p);
         const penumbra::SampleBufferInput centre_input{f.centreRange(), f.normalRange()};
         const penumbra::SampleBufferInput extended_input{whole(sample_pos), whole(sample_nrm)};
-        hard.validate(centre_input, p);
-        hard.validate(extended_input, extended);
+        hard_off.validate(centre_input, p);
+        hard_full.validate(extended_input, extended);
         const gl::AaCasterBuffers casters = f.casters();
 
         auto [lo, hi] = penumbra::viewSampleBounds(f.centres.data(), f.centres.size());
@@ -207,6 +221,10 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         const bool runs_ok_setup = stencil.run(f.centreRange(), f.normalRange(), f.view, light, casters) == penumbra::Status::Ok;
         uint32_t budget = 0;
         for (uint32_t word : stencil.readStencil()) budget += (word & PENUMBRA_AA_FLAG) != 0;
+        const penumbra::AliasFreeHardOptions edge_options = hardOptions(uint64_t(budget) * samples);
+        penumbra::AliasFreeHardShadows hard_edge(edge_options);
+        hard_edge.reserve(stencil.sampleCount(penumbra::AaMode::Edge, budget));
+        hard_edge.validate(extended_input, stencil.sampleCount(penumbra::AaMode::Edge, budget));
         bool runs_ok = runs_ok_setup;
         auto stencilRun = [&](gl::ShadowEdgeStencil* s) {
             return [&, s] {
@@ -217,6 +235,7 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
             if (mode != penumbra::AaMode::Off)
                 runs_ok &= stencil.writeSampleBuffer(mode, whole(sample_pos), whole(sample_nrm), budget) == penumbra::Status::Ok;
             const bool off = mode == penumbra::AaMode::Off;
+            penumbra::AliasFreeHardShadows& hard = off ? hard_off : mode == penumbra::AaMode::Edge ? hard_edge : hard_full;
             const uint32_t count = stencil.sampleCount(mode, budget);
             runs_ok &= hard.run(off ? centre_input : extended_input, count, light, draw) == penumbra::Status::Ok;
             runs_ok &= stencil.resolve(mode, {hard.stateBuffer().id(), 0, 4ull * count}, whole(visible), budget) ==
@@ -258,7 +277,7 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         const auto status = stencil.readStatus();
         hardAndResolve(penumbra::AaMode::Full);
         const std::vector<float> full_visible = visible.download<float>();
-        const std::vector<uint32_t> full_states = hard.stateBuffer().download<uint32_t>(0, extended);
+        const std::vector<uint32_t> full_states = hard_full.stateBuffer().download<uint32_t>(0, extended);
         hardAndResolve(penumbra::AaMode::Edge);
         const std::vector<float> edge_visible = visible.download<float>();
         if (!runs_ok) {
@@ -306,6 +325,9 @@ void BM_ShadowEdgeStencil(benchmark::State& state, const StencilScene& spec, uin
         state.counters["list_overflow"] = double(status[PENUMBRA_AA_STATUS_LIST_OVERFLOW]);
         state.counters["untested_full"] = double(untested);
         state.counters["budget"] = double(budget);
+        state.counters["grid_off"] = double(off_options.grid_width);
+        state.counters["grid_edge"] = double(edge_options.grid_width);
+        state.counters["grid_full"] = double(full_options.grid_width);
         state.counters["err_budget_overflow"] = double(stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW]);
         if (differing + missed > 0) {
             std::fprintf(stderr, "shadow_edge_stencil_bench %s/%u: %zu pixels differ between edge and full, %zu edge pixels"

@@ -545,3 +545,22 @@ TEST_CASE("resolve and bad input") {
     c.threshold = 1.5f;
     CHECK_THROWS_WITH_AS(penumbra::chebyshevEdgeStencilCpu(m, l, f, c), doctest::Contains("threshold 1.5"), penumbra::Error);
 }
+
+TEST_CASE("afhGridSideForSamples: about one texel per sample, a quarter octave finer") {
+    // 2^e for 2^(2e - 1.5) <= samples < 2^(2e + 0.5), within [16, kSampleListsMaxGridSide].
+    CHECK(penumbra::afhGridSideForSamples(0) == 16);
+    CHECK(penumbra::afhGridSideForSamples(1) == 16);
+    CHECK(penumbra::afhGridSideForSamples(512u * 384u) == 512);       // the demo's view: its own size
+    CHECK(penumbra::afhGridSideForSamples(512u * 512u) == 512);
+    CHECK(penumbra::afhGridSideForSamples(512u * 512u * 5u) == 1024);  // full, N = 4
+    CHECK(penumbra::afhGridSideForSamples(21368) == 128);              // edge runs of BM_ShadowEdgeStencil
+    CHECK(penumbra::afhGridSideForSamples(28732) == 256);
+    CHECK(penumbra::afhGridSideForSamples(68772) == 256);
+    // The boundaries: 2^14.5 = 23170.5 and 2^16.5 = 92681.9 between 128, 256 and 512.
+    CHECK(penumbra::afhGridSideForSamples(23170) == 128);
+    CHECK(penumbra::afhGridSideForSamples(23171) == 256);
+    CHECK(penumbra::afhGridSideForSamples(92681) == 256);
+    CHECK(penumbra::afhGridSideForSamples(92682) == 512);
+    CHECK(penumbra::afhGridSideForSamples(uint64_t(1) << 40) == penumbra::kSampleListsMaxGridSide);
+    CHECK(penumbra::afhGridSideForSamples(~uint64_t(0)) == penumbra::kSampleListsMaxGridSide);
+}

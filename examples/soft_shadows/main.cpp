@@ -1172,23 +1172,32 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     }
 
     penumbra::AliasFreeHardShadows hard(options);
-    hard.reserve(all);
+    hard.reserve(p);
     auto draw = [&](penumbra::CasterClass cls) { gpu.drawClass(cls == penumbra::CasterClass::Closed); };
     Buffer sample_pos(stencil.sampleBufferBytes()), sample_nrm(stencil.sampleBufferBytes());
     Buffer visible[3] = {Buffer(4ull * p), Buffer(4ull * p), Buffer(4ull * p)};  // off, edge, full
-    const penumbra::BufferRange states{hard.stateBuffer().id(), 0, 4ull * all};
     auto runOff = [&] {
         const Status s = hard.run(penumbra::SampleBufferInput{range(centres), normals}, p, light, draw);
-        return s == Status::Ok ? stencil.resolve(AaMode::Off, {states.buffer, 0, 4ull * p}, range(visible[0])) : s;
+        return s == Status::Ok ? stencil.resolve(AaMode::Off, {hard.stateBuffer().id(), 0, 4ull * p}, range(visible[0])) : s;
     };
     // Edge packs the flagged pixels' sub-samples after the centres, `budget` pixels' worth: the
-    // hard pipeline runs P + budget N samples (full: P (1 + N)).
-    auto runSamples = [&](ShadowEdgeStencil& st, AaMode mode, const Buffer& out, uint32_t budget) {
+    // hard pipeline runs P + budget N samples (full: P (1 + N)); with the provable stencil the
+    // centres are all empty slots (it decided the unflagged pixels). Each run has a hard pipeline
+    // whose light grid suits its sample count (afhGridSideForSamples; off: the view's size).
+    auto runSamples = [&](penumbra::AliasFreeHardShadows& hp, ShadowEdgeStencil& st, AaMode mode, const Buffer& out,
+                          uint32_t budget) {
         const uint32_t count = st.sampleCount(mode, budget);
         Status s = st.writeSampleBuffer(mode, range(sample_pos), range(sample_nrm), budget);
-        if (s == Status::Ok) s = hard.run(penumbra::SampleBufferInput{range(sample_pos), range(sample_nrm)}, count, light, draw);
-        return s == Status::Ok ? st.resolve(mode, {states.buffer, 0, 4ull * count}, range(out), budget) : s;
+        if (s == Status::Ok) s = hp.run(penumbra::SampleBufferInput{range(sample_pos), range(sample_nrm)}, count, light, draw);
+        return s == Status::Ok ? st.resolve(mode, {hp.stateBuffer().id(), 0, 4ull * count}, range(out), budget) : s;
     };
+    auto gridFor = [&](uint64_t samples) {
+        penumbra::AliasFreeHardOptions o = options;
+        o.grid_width = o.grid_height = penumbra::afhGridSideForSamples(samples);
+        return o;
+    };
+    penumbra::AliasFreeHardShadows hard_full(gridFor(all));
+    hard_full.reserve(all);
     // The edge layout's budget: the frame's flagged count (an engine would take the last frame's
     // plus a margin); every flag, surface or not, takes a rank.
     auto budgetOf = [&](const std::vector<uint32_t>& ws) {
@@ -1217,16 +1226,20 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     runs[main_kind].words = stencil.readStencil();
     const uint32_t budget = budgetOf(runs[main_kind].words);
     const auto stencil_status = stencil.readStatus();
+    // Edge's samples: the flagged pixels' sub-samples, plus every centre unless the stencil proved them.
+    penumbra::AliasFreeHardShadows hard_edge(gridFor(uint64_t(budget) * n + (main_kind == 0 ? 0u : p)));
+    hard_edge.reserve(all);
     const double edge_ms =
-        timedFrame([&] { return runSamples(stencil, AaMode::Edge, visible[1], budget); }, "hard-shadow (--aa edge)");
+        timedFrame([&] { return runSamples(hard_edge, stencil, AaMode::Edge, visible[1], budget); }, "hard-shadow (--aa edge)");
     if (edge_ms < 0) return 1;
-    const penumbra::AliasFreeHardFrame edge_frame = hard.readFrame();
+    const penumbra::AliasFreeHardFrame edge_frame = hard_edge.readFrame();
     const uint32_t budget_overflow = stencil.readStatus()[PENUMBRA_AA_STATUS_BUDGET_OVERFLOW];
     runs[main_kind].visible_edge = visible[1].download<float>();
     const double full_ms =
-        timedFrame([&] { return runSamples(stencil, AaMode::Full, visible[2], penumbra::kAaAllPixels); }, "hard-shadow (--aa full)");
+        timedFrame([&] { return runSamples(hard_full, stencil, AaMode::Full, visible[2], penumbra::kAaAllPixels); },
+                   "hard-shadow (--aa full)");
     if (full_ms < 0) return 1;
-    const penumbra::AliasFreeHardFrame full_frame = hard.readFrame();
+    const penumbra::AliasFreeHardFrame full_frame = hard_full.readFrame();
     const std::vector<float> vis_full = visible[2].download<float>();
     const std::vector<glm::vec4> full_positions = sample_pos.download<glm::vec4>(0, all);
     // With --reference: the other stencils, run the same way (each stencil pass timed on its own).
@@ -1235,7 +1248,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
         runs[k].stencil_ms = timedFrame(runStencil(*stencils[k]), kAaStencilNames[k]);
         if (runs[k].stencil_ms < 0) return 1;
         runs[k].words = stencils[k]->readStencil();
-        if (runSamples(*stencils[k], AaMode::Edge, visible[1], budgetOf(runs[k].words)) != Status::Ok) return 1;
+        if (runSamples(hard_edge, *stencils[k], AaMode::Edge, visible[1], budgetOf(runs[k].words)) != Status::Ok) return 1;
         runs[k].visible_edge = visible[1].download<float>();
     }
     for (AaStencilRun& r : runs)
@@ -1358,6 +1371,9 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
                    {"edge_vs_full_differing_pixels", edge_vs_full},
                    {"tested_samples", {{"off", v.count}, {"edge", edge_frame.statistics.listed_samples},
                                        {"full", full_frame.statistics.listed_samples}}},
+                   {"light_grid", {{"off", {w, h}},  // each run's hard pipeline (W, H)
+                                   {"edge", {hard_edge.options().grid_width, hard_edge.options().grid_height}},
+                                   {"full", {hard_full.options().grid_width, hard_full.options().grid_height}}}},
                    {"stencil_pairs", stencil_status[PENUMBRA_AA_STATUS_PAIRS]},
                    {"stencil_exact_tests", stencil_status[PENUMBRA_AA_STATUS_EXACT]},
                    {"stencil_list_overflow", stencil_status[PENUMBRA_AA_STATUS_LIST_OVERFLOW]},
