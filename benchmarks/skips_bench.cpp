@@ -19,7 +19,8 @@
 //            one exact test from the light centre per pair (the casters' adjacency drawn by
 //            GpuScene::drawAdjacency)
 //   hard (penumbra/gl/pipelines/alias_free_hard.hpp, AliasFreeHardOptions):
-//     cull = light_facing_only, fit = fit_frustum, shadowed = skip_shadowed, box = clip_to_box.
+//     cull = light_facing_only, fit = fit_frustum, shadowed = skip_shadowed, box = clip_to_box,
+//     empty = skip_empty_texels (the occupancy stencil).
 //   Methods of an entry: off (every skip off), each skip alone, all (every skip on).
 //
 // BM_SoftSkips/<scene>: the scene's camera view rendered into a W x H G-buffer
@@ -434,12 +435,14 @@ void BM_SoftSkips(benchmark::State& state, const SceneSpec& spec) {
 
 struct HardMethod {
     std::string name;
-    bool cull = false, fit = false, shadowed = false, box = false;
+    bool cull = false, fit = false, shadowed = false, box = false, empty = false;
 };
 
 std::vector<HardMethod> hardMethods() {
-    return {{"off", false, false, false, false},   {"cull", true, false, false, false}, {"fit", false, true, false, false},
-            {"shadowed", false, false, true, false}, {"box", false, false, false, true},  {"all", true, true, true, true}};
+    return {{"off", false, false, false, false, false},     {"cull", true, false, false, false, false},
+            {"fit", false, true, false, false, false},      {"shadowed", false, false, true, false, false},
+            {"box", false, false, false, true, false},      {"empty", false, false, false, false, true},
+            {"all", true, true, true, true, true}};
 }
 
 /// One scene seen through the hard G-buffer and its point light.
@@ -479,6 +482,7 @@ struct HardScene {
         o.fit_frustum = m.fit;
         o.skip_shadowed = m.shadowed;
         o.clip_to_box = m.box;
+        o.skip_empty_texels = m.empty;
         return o;
     }
 };

@@ -284,6 +284,7 @@ TEST_CASE("GPU pipeline == CPU twin, both inputs, raster variants and precisions
                     o.precision = precision;
                     o.skip_shadowed = skips == 1;
                     o.clip_to_box = skips == 1;
+                    o.skip_empty_texels = skips == 1;
                     penumbra::AliasFreeHardShadows pipeline(o);
                     const auto states = runPipeline(pipeline, f, light, v);
                     const penumbra::AliasFreeHardFrame frame = pipeline.readFrame();

@@ -179,9 +179,10 @@ struct Args {
 //         fit   = the light grid fitted to the view samples (sintorn2008 §4.3) instead of their box;
 //         silhouette = outside every potential silhouette edge's region one test from the light
 //                 centre per pair (SoftSkips::silhouettes, laine2005 §3.3).
-//   hard: cull  = light_facing_only; fit = fit_frustum; shadowed = skip_shadowed; box = clip_to_box.
+//   hard: cull  = light_facing_only; fit = fit_frustum; shadowed = skip_shadowed; box = clip_to_box;
+//         empty = skip_empty_texels (an occupancy stencil culls the fragments of sample-less texels).
 const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit", "silhouette"};
-const std::vector<std::string> kHardSkips = {"cull", "fit", "shadowed", "box"};
+const std::vector<std::string> kHardSkips = {"cull", "fit", "shadowed", "box", "empty"};
 
 /// The flags' text as given, before checkArgs turns them into Args values.
 struct RawArgs {
@@ -338,7 +339,8 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
                    "(supporting-plane cut per pair and of the influence regions), fit (light grid fitted to the view "
                    "samples), silhouette (outside every potential silhouette edge's region one test from the light centre); "
                    "hard: cull, fit, shadowed (no retest of shadowed samples), box (clip to the triangle's "
-                   "box). None changes a shadow bit")
+                   "box), empty (an occupancy stencil culls the fragments of texels with no samples). None changes a "
+                   "shadow bit")
         ->type_name("all|none|LIST")
         ->capture_default_str();
     app.add_flag("--check-skips", a.check_skips,
@@ -1129,6 +1131,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     options.fit_frustum = args.skip("fit");
     options.skip_shadowed = args.skip("shadowed");
     options.clip_to_box = args.skip("box");
+    options.skip_empty_texels = args.skip("empty");
     penumbra::AaPatternOptions pattern;
     pattern.samples = n;
     auto range = [](const Buffer& b) { return penumbra::BufferRange{b.id(), 0, b.size()}; };
@@ -1456,6 +1459,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         o.fit_frustum = !all_off && args.skip("fit");
         o.skip_shadowed = !all_off && args.skip("shadowed");
         o.clip_to_box = !all_off && args.skip("box");
+        o.skip_empty_texels = !all_off && args.skip("empty");
         return o;
     };
     const penumbra::AliasFreeHardOptions options = makeOptions(false);

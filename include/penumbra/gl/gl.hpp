@@ -80,6 +80,47 @@ inline void setPassRasterState() {
     glProvokingVertex(GL_LAST_VERTEX_CONVENTION);
 }
 
+/// The occupancy stencil of the list-walking light passes (AliasFreeHardOptions::
+/// skip_empty_texels, SoftSkips::empty_blocks) holds 8 bits per texel: blocks from this one on
+/// are drawn without it.
+inline constexpr uint32_t kOccupancyStencilBlocks = 255;
+
+/// Fills `framebuffer`'s stencil (bound for drawing, viewport the grid) with each texel's count of
+/// non-empty list blocks: cleared to 0, then per block b < min(blocks, kOccupancyStencilBlocks) a
+/// full-screen triangle of `program` (whose fragments survive where block b holds samples) with
+/// GL_INCR, under `begin_block(b)` / `end_block(b)` (the caller's parameters and conditional
+/// render). Leaves GL_STENCIL_TEST on, write mask 0, operations GL_KEEP; `program` and `vao` bound.
+template <class BeginBlock, class EndBlock>
+inline void drawOccupancyStencil(GLuint framebuffer, GLuint program, GLuint vao, uint32_t blocks, BeginBlock&& begin_block,
+                                 EndBlock&& end_block) {
+    glStencilMask(0xFFu);
+    const GLint clear = 0;
+    glClearNamedFramebufferiv(framebuffer, GL_STENCIL, 0, &clear);
+    glEnable(GL_STENCIL_TEST);
+    glStencilFunc(GL_ALWAYS, 0, 0xFFu);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+    glUseProgram(program);
+    glBindVertexArray(vao);
+    for (uint32_t b = 0; b < blocks && b < kOccupancyStencilBlocks; ++b) {
+        begin_block(b);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        end_block(b);
+    }
+    glStencilMask(0u);
+    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+}
+
+/// The light pass of block b under the occupancy stencil: stencil test `func` against b where the
+/// stencil counts that block (`enabled` and b < kOccupancyStencilBlocks), else no stencil test.
+inline void occupancyStencilTest(bool enabled, uint32_t b, GLenum func) {
+    if (enabled && b < kOccupancyStencilBlocks) {
+        glEnable(GL_STENCIL_TEST);
+        glStencilFunc(func, static_cast<GLint>(b), 0xFFu);
+    } else {
+        glDisable(GL_STENCIL_TEST);
+    }
+}
+
 }  // namespace penumbra::gl
 
 #endif

@@ -88,6 +88,11 @@ struct AliasFreeHardOptions {
     // caster already shadowed; fragments outside the triangle's pixel-expanded box are discarded.
     bool skip_shadowed = true;
     bool clip_to_box = true;
+    /// GPU only: an occupancy stencil (one full-screen pass per list block, GL_STENCIL_INDEX8 at
+    /// the grid's size) lets the light pass cull, by the early stencil test, the fragments of
+    /// texels whose list block holds no sample; such a fragment tests nothing, so the bits are the
+    /// same. Most of a sparse run's fragments (anti-aliasing's edge run) are such.
+    bool skip_empty_texels = true;
     /// §3.3: closed casters cast only their light-back-facing triangles (about half the light-pass
     /// work). Off by default: it is exact for every sample outside a closed mesh but misses a
     /// sample lying exactly in a concave crease of a closed surface, lit at a grazing angle that

@@ -43,6 +43,10 @@ layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uin
 #include "penumbra/conservative_raster/conservative_raster_clip.glsl"
 #include "penumbra/alias_free_hard/blocker_test.glsl"
 
+// skip_empty_texels: the pipeline's occupancy stencil (occupancy.frag.glsl) culls the fragments of
+// texels whose list block is empty before they are shaded, which needs the test before the stores.
+layout(early_fragment_tests) in;
+
 layout(location = 0) flat in vec3 penumbraAfhVertex0;
 layout(location = 1) flat in vec3 penumbraAfhVertex1;
 layout(location = 2) flat in vec3 penumbraAfhVertex2;

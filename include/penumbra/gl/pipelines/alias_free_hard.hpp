@@ -25,9 +25,13 @@
 //             waits for the GPU) the fit, Fig. 9 statistics, passes, overflow and work counters.
 //   per frame: run() — (1) §4.3 fit on the GPU into the frustum block, (2) lists (count, scan,
 //             scatter) + statistics, (3) a predicate pass: one point per list block inside an
-//             occlusion query, surviving when the longest list needs that block, (4) light pass:
-//             for each block b < max_list_blocks, under glBeginConditionalRender(query b), every
-//             caster drawn into a W x H framebuffer with no attachments; the geometry stage culls
+//             occlusion query, surviving when the longest list needs that block, (3b) with
+//             skip_empty_texels (default) an occupancy pass per needed block: a full-screen
+//             triangle increments a W x H GL_STENCIL_INDEX8 stencil where the texel's block b holds
+//             samples, (4) light pass: for each block b < max_list_blocks, under
+//             glBeginConditionalRender(query b), every caster drawn into a W x H framebuffer (no
+//             colour attachment; the stencil, tested GL_LESS b with early fragment tests, culls the
+//             fragments of texels with nothing in block b); the geometry stage culls
 //             (closed casters with back_faces_only: only light-back-facing triangles, §3.3; with
 //             light_facing_only: only those that do not face away from the light, exact) and
 //             emits the triangle's conservative coverage; each fragment walks its texel's list
@@ -48,7 +52,9 @@
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
-// (off), GL_DEPTH_CLAMP (left on: casters before the near / beyond the far plane still cast), the
+// (off), GL_DEPTH_CLAMP (left on: casters before the near / beyond the far plane still cast),
+// GL_STENCIL_TEST (off), the stencil function, operations and write mask (0 at the end) with
+// skip_empty_texels, the
 // rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip distances
 // off, clip control lower-left / -1..1, depth range [0, 1], no smoothing, offset or primitive
 // restart, CCW, last provoking vertex: whatever the engine left there cannot clip or thin the
@@ -158,6 +164,13 @@ public:
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/alias_free_hard/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", defines, library);
+        if (options_.skip_empty_texels) {
+            occupancy_ = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/alias_free_hard/occupancy.frag.glsl"},
+                                          defines, library);
+            stencil_ = gl::Renderbuffer::create();
+            glNamedRenderbufferStorage(stencil_.id(), GL_STENCIL_INDEX8, static_cast<GLsizei>(options_.grid_width),
+                                       static_cast<GLsizei>(options_.grid_height));
+        }
         conservative_params_ = gl::Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
         ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
         param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(AfhParams), ubo_alignment_) * ubo_alignment_);
@@ -168,6 +181,14 @@ public:
         framebuffer_ = gl::Framebuffer::create();
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
+        if (options_.skip_empty_texels) {
+            glNamedFramebufferRenderbuffer(framebuffer_.id(), GL_STENCIL_ATTACHMENT, GL_RENDERBUFFER, stencil_.id());
+            const GLenum complete = glCheckNamedFramebufferStatus(framebuffer_.id(), GL_DRAW_FRAMEBUFFER);
+            PENUMBRA_CHECK(complete == GL_FRAMEBUFFER_COMPLETE, "penumbra::AliasFreeHardShadows: the light pass's ",
+                           options_.grid_width, " x ", options_.grid_height,
+                           " framebuffer with a GL_STENCIL_INDEX8 attachment (skip_empty_texels) is incomplete (status 0x",
+                           std::hex, complete, std::dec, "); set skip_empty_texels = false");
+        }
         empty_vao_ = gl::VertexArray::create();
         for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
         gl::checkErrors("penumbra::AliasFreeHardShadows");
@@ -280,7 +301,8 @@ private:
     AfhBindings bindings_;
     SampleListBuilder builder_;
     ConservativeRasterSetup conservative_;
-    gl::Program light_pass_, spill_pass_, blocks_, resolve_;
+    gl::Program light_pass_, spill_pass_, blocks_, resolve_, occupancy_;
+    gl::Renderbuffer stencil_;  // skip_empty_texels: W x H, non-empty list blocks per texel
     gl::Buffer conservative_params_, afh_params_, work_;
     gl::Buffer spill_, spill_world_;  // two-pass only: spill header + triangles, spill-world header + vertices
     gl::ConservativeRasterBindings spill_bindings_{};
@@ -365,6 +387,7 @@ private:
         glDisable(GL_CULL_FACE);
         glDisable(GL_RASTERIZER_DISCARD);
         glEnable(GL_DEPTH_CLAMP);  // casters nearer than the near plane or beyond the far plane still cast
+        glDisable(GL_STENCIL_TEST);  // the framebuffer may hold the occupancy stencil: its own state comes at (3b)
         gl::setPassRasterState();
         // (3) Which list blocks does the longest list need? One point per block, on the GPU.
         blocks_.use();
@@ -382,7 +405,22 @@ private:
             glEndQuery(GL_ANY_SAMPLES_PASSED);
         }
         glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
-        // (4) Light pass, block by block; blocks no list needs are skipped by the GPU.
+        // (3b) skip_empty_texels: the stencil counts each texel's non-empty list blocks.
+        const bool stencil = options_.skip_empty_texels;
+        if (stencil) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            gl::drawOccupancyStencil(
+                framebuffer_.id(), occupancy_.id(), empty_vao_.id(), options_.max_list_blocks,
+                [&](uint32_t b) {
+                    glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                    bindParams(1 + 2 * b + 1);
+                },
+                [](uint32_t) { glEndConditionalRender(); });
+        }
+        // (4) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
+        // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
+        // fragment tests).
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
         glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.frustum, lists_.frustum.id(), 0, sizeof(SampleListsFrustum));
@@ -394,6 +432,7 @@ private:
         static constexpr shared::PenumbraAfhSpillWorldHeader kSpillWorldReset{};
         const BufferRange spill = spillRange();
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+            gl::occupancyStencilTest(stencil, b, GL_LESS);
             glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
             if (two_pass_) {
                 // Buffer updates run whether or not the block is drawn; they only reset.
@@ -429,6 +468,7 @@ private:
                                          PENUMBRA_AFH_WORK_SPILL_OVERFLOW * 4, 4);
             }
         }
+        glDisable(GL_STENCIL_TEST);
         // (5) Resolve.
         resolve_.use();
         bindParams(0);

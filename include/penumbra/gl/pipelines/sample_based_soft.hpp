@@ -385,8 +385,6 @@ private:
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
     /// pass), closed for count_work's complement draw.
     static constexpr uint32_t kSlotsPerBlock = 4;
-    /// The occupancy stencil holds 8 bits: blocks from 255 on are drawn without it.
-    static constexpr uint32_t kStencilBlocks = 255;
     gl::Buffer marks_;                                // SoftSkips::silhouettes: W x H texel marks
     gl::Buffer near_;                                 // SoftSkips::closed_casters: per sample
     const DrawAdjacency* draw_adjacency_ = nullptr;   // this run's (begin() .. the light pass)
@@ -517,38 +515,22 @@ private:
         }
         // (2c) SoftSkips::empty_blocks: the stencil counts each texel's non-empty list blocks.
         const bool stencil = options_.skips.empty_blocks;
-        const uint32_t stencil_blocks = std::min(options_.max_list_blocks, kStencilBlocks);
+        const uint32_t stencil_blocks = std::min(options_.max_list_blocks, gl::kOccupancyStencilBlocks);
         if (stencil) {
-            glStencilMask(0xFFu);
-            const GLint clear = 0;
-            glClearNamedFramebufferiv(framebuffer_.id(), GL_STENCIL, 0, &clear);
-            glEnable(GL_STENCIL_TEST);
-            glStencilFunc(GL_ALWAYS, 0, 0xFFu);
-            glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
-            occupancy_.use();
-            glBindVertexArray(empty_vao_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-            for (uint32_t b = 0; b < stencil_blocks; ++b) {
-                glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-                bindParams(1 + kSlotsPerBlock * b + 1);
-                glDrawArrays(GL_TRIANGLES, 0, 3);
-                glEndConditionalRender();
-            }
-            glStencilMask(0u);
-            glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+            gl::drawOccupancyStencil(
+                framebuffer_.id(), occupancy_.id(), empty_vao_.id(), options_.max_list_blocks,
+                [&](uint32_t b) {
+                    glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                    bindParams(1 + kSlotsPerBlock * b + 1);
+                },
+                [](uint32_t) { glEndConditionalRender(); });
         }
         // (3) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
         // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
         // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
-        const auto stencilTest = [&](uint32_t b, GLenum func) {
-            if (stencil && b < stencil_blocks) {
-                glEnable(GL_STENCIL_TEST);
-                glStencilFunc(func, static_cast<GLint>(b), 0xFFu);
-            } else {
-                glDisable(GL_STENCIL_TEST);
-            }
-        };
+        const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
