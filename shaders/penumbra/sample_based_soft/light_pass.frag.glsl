@@ -28,6 +28,7 @@
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_MODE=1
+// penumbra-permutation: PENUMBRA_SBS_MODE=1 PENUMBRA_SBS_SILHOUETTES=1
 // penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
 #include "penumbra/sample_lists/sample_lists_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
@@ -132,12 +133,8 @@ PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip
     return result;
 }
 
-// The exact verdict for light sample `index` (of the whole K * N array): the hard pipeline's
-// fp64 segment test with the sample as the point light.
-bool penumbraSbsBlocks(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 p, uint index) {
-    const dvec3 l = penumbraSbsSamples[index].xyz;
-    return penumbraAfhBlocks(v0, v1, v2, p, l, penumbraSbsParams.epsilon.x, 0.0LF);
-}
+// The light samples of mask word w (of n): bits 32 w .. min(32 w + 31, n - 1).
+uint penumbraSbsWordBits(uint w, uint n) { return 32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u; }
 
 // One table's four mask words OR-ed into a view sample's mask from word `base` on (only the
 // `left` words the sample has from there), constant indices, no atomic for an empty word.
@@ -246,22 +243,14 @@ void main() {
             continue;
         }
         ++pairs;
-#if PENUMBRA_SBS_SILHOUETTES
-        if (hard_texel) {
-            ++hard;
-            ++tests;
-            if (penumbraAfhBlocks(v0, v1, v2, p, P.center.xyz, P.epsilon.x, 0.0LF)) {
-                for (uint w = 0u; w < words; ++w) {
-                    const uint bits = 32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u;
-                    atomicOr(penumbraSbsMasks[mask_base + w], bits);
-                }
-            }
-            continue;
-        }
-#endif
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
         PenumbraSbsPlane planes[4];
-        if (!all_exact) {
+        if (hard_texel) {
+            // SoftSkips::silhouettes: one exact test from the light centre, at the exact-test site
+            // below. It shares that site rather than having its own branch: SIMD drivers that run
+            // every branch under lane masks (llvmpipe) would pay for a separate test on every pair.
+            ++hard;
+        } else if (!all_exact) {
             if (distance2 < 0.0LF) distance2 = penumbraAfhPointTriangleDistance2(p, v0, v1, v2);
             precise double ignore = P.epsilon.x * scale_lo;
             if (distance2 < ignore * ignore * (1.0LF - 1e-9LF)) {  // the oracle ignores T for every sample
@@ -325,10 +314,10 @@ void main() {
         }
         // Exact/Brute: the words of the sample's mask with light samples left to the exact test
         // (an all-exact pair: every word, every sample).
-        uint pending = all_exact ? (words >= 32u ? 0xFFFFFFFFu : (1u << words) - 1u) : 0u;
+        uint pending = hard_texel ? 1u : all_exact ? (words >= 32u ? 0xFFFFFFFFu : (1u << words) - 1u) : 0u;
         uvec4 undecided[PENUMBRA_SBS_MAX_WORDS / 4u];  // the uncertain bits of pending words, per table
 #if PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_BRUTE_ID
-        if (!all_exact) {
+        if (!all_exact && !hard_texel) {
             // Each plane's LUT cell is the same in every table of the set: located once per pair,
             // not once per 128-sample block (N = 1024: 4 locations instead of 32).
             PenumbraLutCell cells[4];
@@ -374,24 +363,35 @@ void main() {
             }
         }
 #endif
-#if PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_LUT_ID
-        // One exact-test site for every pending word: bit b of word w is light sample 32 w + b.
+#if PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_LUT_ID || PENUMBRA_SBS_SILHOUETTES
+        // One exact-test site for every pending word: bit b of word w is light sample 32 w + b (a
+        // hard texel's pair: word 0, bit 0, the light centre standing for every sample).
         uint w = 0u, bits = 0u, m = 0u;
         while (pending != 0u) {
             if (bits == 0u) {
                 w = uint(findLSB(pending));
-                bits = all_exact ? (32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u) : undecided[w >> 2u][w & 3u];
+#if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_LUT_ID
+                bits = 1u;  // Lut: only a hard texel's pair has a pending word
+#else
+                bits = hard_texel ? 1u : all_exact ? penumbraSbsWordBits(w, n) : undecided[w >> 2u][w & 3u];
+#endif
                 m = 0u;
             }
             const uint bit = uint(findLSB(bits));
             bits &= bits - 1u;
             ++tests;
-            if (penumbraSbsBlocks(v0, v1, v2, p, sample_base + 32u * w + bit)) m |= 1u << bit;
+            const dvec3 l = hard_texel ? P.center.xyz : penumbraSbsSamples[sample_base + 32u * w + bit].xyz;
+            if (penumbraAfhBlocks(v0, v1, v2, p, l, P.epsilon.x, 0.0LF)) m |= 1u << bit;
             if (bits == 0u) {
-                if (m != 0u) atomicOr(penumbraSbsMasks[mask_base + w], m);
+                if (m != 0u && !hard_texel) atomicOr(penumbraSbsMasks[mask_base + w], m);
                 pending &= ~(1u << w);
             }
         }
+#if PENUMBRA_SBS_SILHOUETTES
+        // A hard texel's pair whose centre T blocks: T blocks every light sample.
+        if (hard_texel && m != 0u)
+            for (uint k = 0u; k < words; ++k) atomicOr(penumbraSbsMasks[mask_base + k], penumbraSbsWordBits(k, n));
+#endif
 #endif
     }
 #if PENUMBRA_SBS_COUNT_WORK
