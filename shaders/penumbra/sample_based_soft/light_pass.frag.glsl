@@ -388,7 +388,8 @@ void main() {
             }
         }
 #if PENUMBRA_SBS_SILHOUETTES
-        // A hard texel's pair whose centre T blocks: T blocks every light sample.
+        // A hard texel's pair where T blocks the centre: every light sample shares the centre's
+        // verdict there (some caster blocks each), so T sets them all.
         if (hard_texel && m != 0u)
             for (uint k = 0u; k < words; ++k) atomicOr(penumbraSbsMasks[mask_base + k], penumbraSbsWordBits(k, n));
 #endif
