@@ -326,6 +326,14 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
     pipeline.reserve(4);
 #endif
     CHECK(pipeline.run(input, 4, lut_table, draw) == Status::Ok);
+    // SoftSkips::silhouettes needs the casters with adjacency: a run without its callback is refused.
+    options.skips.silhouettes = true;
+    penumbra::SampleBasedSoftShadows silhouettes(options, sets, &seed_lut, influence, vp);
+    silhouettes.reserve(4);
+#ifdef NDEBUG
+    CHECK(silhouettes.run(input, 4, lut_table, draw) == Status::InvalidArgument);
+#endif
+    CHECK(silhouettes.run(input, 4, lut_table, draw, {}, [] {}) == Status::Ok);
 }
 
 TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-pass == one pass, per-frame contract") {
