@@ -11,8 +11,10 @@
 #include <penumbra/light_volume.hpp>
 #include <penumbra/light_samples.hpp>
 #include <penumbra/penumbra_casting.hpp>
+#include <penumbra/adjacency.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/pipelines/sample_based_soft.hpp>
+#include <penumbra/pipelines/silhouette_marks.hpp>
 #include <penumbra/reference/compare.hpp>
 #include <penumbra/reference/light_samples.hpp>
 #include <penumbra/reference/light_shafts.hpp>

@@ -10,7 +10,9 @@
 
 #include <penumbra/gl/objects.hpp>
 #include <penumbra/gl/pipelines/sample_based_soft.hpp>
+#include <penumbra/adjacency.hpp>
 #include <penumbra/pipelines/alias_free_hard.hpp>
+#include <penumbra/pipelines/silhouette_marks.hpp>
 #include <penumbra/scene/gl_scene.hpp>
 #include <penumbra/scene/scene.hpp>
 
@@ -623,5 +625,55 @@ TEST_CASE("SoftSkips::silhouettes: one test from the light centre outside every 
         CHECK(on.pairs_hard > on.pairs / 10);  // the one-test path is exercised (17 % on llvmpipe)
         CHECK(hard_full > 0);
         if (mode != penumbra::SoftMode::Lut) CHECK(differ == 0);
+    }
+}
+
+TEST_CASE("SoftSkips::silhouettes: the GPU's texel marks == the CPU twin's (sampleBasedSoftSilhouetteMarks)") {
+    penumbra::test::context();
+    struct Case {
+        const char* scene;
+        float light_radius;  // 0: the scene's
+        uint32_t grid;
+    };
+    for (const Case c : {Case{"torus_knot", 0.02f, 512}, Case{"columns", 0.0f, 128}, Case{"torus_knot", 0.0f, 256}}) {
+        penumbra::scene::Scene scene = penumbra::scene::builtin(c.scene);
+        if (c.light_radius > 0.0f) scene.light.radius = c.light_radius;
+        const penumbra::test::GlWorld w(std::move(scene));
+        const penumbra::test::GlSoftLight soft(w, 32, c.grid, 128);
+        const penumbra::BufferRange lut_table = soft.table();
+        const penumbra::SampleDepthInput input = w.depthInput();
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.grid_width = options.grid_height = c.grid;
+        options.skips.silhouettes = true;
+        penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+        pipeline.reserve(w.samples());
+        pipeline.validate(input, lut_table);
+        REQUIRE(pipeline.run(input, lut_table, [&](penumbra::CasterClass cls) { w.drawClass(cls); }, {},
+                             [&] { w.gpu.drawAdjacency(); }) == Status::Ok);
+        const std::vector<uint32_t> gpu = pipeline.readMarks();
+        const std::vector<glm::vec3>& positions = w.gpu.positions();
+        const std::vector<uint32_t> adjacency =
+            penumbra::triangleAdjacency(positions.data(), positions.size(), w.gpu.indices().data(), w.gpu.indices().size());
+        const penumbra::SilhouetteMarksCpu twin = penumbra::sampleBasedSoftSilhouetteMarks(
+            positions.data(), positions.size(), adjacency.data(), adjacency.size() / 6, soft.sets.frame, soft.influence);
+        REQUIRE(gpu.size() == twin.marks.size());
+        size_t marked = 0, uncertain = 0, gpu_marked = 0, missed = 0, extra = 0;
+        for (size_t i = 0; i < gpu.size(); ++i) {
+            marked += twin.marks[i];
+            uncertain += twin.uncertain[i];
+            gpu_marked += gpu[i] != 0u;
+            if (twin.uncertain[i]) continue;
+            if (twin.marks[i] && gpu[i] == 0u) ++missed;
+            if (!twin.marks[i] && gpu[i] != 0u) ++extra;
+        }
+        MESSAGE(std::string(c.scene), " (light radius ", w.scene.light.radius, ", grid ", c.grid, "): edges ", twin.edges, ", potential silhouettes ",
+                twin.potential, ", regions ", twin.emitted, "; texels marked by the twin ", marked, " (+", uncertain,
+                " within 1/256 px of a boundary), by the GPU ", gpu_marked, "; twin-marked texels the GPU left ", missed,
+                ", GPU-marked texels the twin did not mark ", extra);
+        CHECK(twin.emitted > 0);
+        CHECK(marked > 0);
+        CHECK(marked < gpu.size());  // some texel lies outside every region
+        CHECK(missed == 0);
+        CHECK(extra == 0);
     }
 }

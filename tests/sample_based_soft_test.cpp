@@ -1,7 +1,10 @@
 // pipelines/sample_based_soft.hpp's CPU twin against the oracle: on the built-in scenes, with the
 // same light samples, Exact and Brute give the oracle's blocked bits on every pair it does not call
 // a tie; Lut's error is reported. Receivers lie on the scenes' surfaces (as view samples do).
+#include "penumbra/adjacency.hpp"
+#include "penumbra/pipelines/alias_free_hard.hpp"
 #include "penumbra/pipelines/sample_based_soft.hpp"
+#include "penumbra/pipelines/silhouette_marks.hpp"
 #include "penumbra/scene/scene.hpp"
 #include "support/test_support.hpp"
 
@@ -1007,4 +1010,49 @@ TEST_CASE("sample-based soft (CPU twin): skips leave every mask bit unchanged, 5
                              << total.bits << " compared");
     REQUIRE_MESSAGE(total.mismatched == total.mismatched_ties, (total.mismatched - total.mismatched_ties)
                                                                    << " Exact/Brute bits the oracle does not call a tie changed by a skip");
+}
+
+TEST_CASE("sampleBasedSoftSilhouetteMarks: a lone triangle's three open edges, bad input names the value") {
+    penumbra::Light light;
+    light.center = glm::dvec3(0, 4, 0);
+    light.size = glm::dvec3(0.3);
+    penumbra::LightSampleOptions so;
+    so.count = 64;
+    so.sets = 1;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(0, 4, 0, 1), glm::vec3(-2, 0, -2), glm::vec3(2, 1, 2));
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 64;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, 6.0);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    // One triangle above the floor: every edge is open, so every edge is a potential silhouette.
+    const std::vector<glm::vec3> positions = {{-0.5f, 1.5f, -0.5f}, {0.5f, 1.5f, -0.5f}, {0.0f, 1.5f, 0.5f}};
+    const std::vector<uint32_t> indices = {0, 1, 2};
+    const std::vector<uint32_t> adjacency = penumbra::triangleAdjacency(positions.data(), positions.size(), indices.data(), indices.size());
+    const penumbra::SilhouetteMarksCpu marks =
+        penumbra::sampleBasedSoftSilhouetteMarks(positions.data(), positions.size(), adjacency.data(), 1, sets.frame, influence);
+    CHECK(marks.edges == 3);
+    CHECK(marks.potential == 3);
+    CHECK(marks.emitted == 3);
+    const size_t marked = static_cast<size_t>(std::count(marks.marks.begin(), marks.marks.end(), uint8_t(1)));
+    MESSAGE("lone triangle: ", marked, " of ", marks.marks.size(), " texels marked");
+    CHECK(marked > 0);
+    CHECK(marked < marks.marks.size());
+    // The floor point where the light centre's ray through an edge's midpoint lands: a segment from
+    // it to the light crosses that edge, so its texel is marked.
+    const glm::dvec3 pixel = penumbra::influenceProjectPixel(influence, glm::dvec3(0.0, 0.0, -0.8));
+    REQUIRE(pixel.z > 0.0);
+    REQUIRE((pixel.x >= 0.0 && pixel.x < 64.0 && pixel.y >= 0.0 && pixel.y < 64.0));
+    CHECK(marks.marks[size_t(pixel.y) * 64 + size_t(pixel.x)] == 1);
+    CHECK(contains(errorOf([&] {
+              penumbra::sampleBasedSoftSilhouetteMarks(positions.data(), positions.size(), adjacency.data(), 1, sets.frame,
+                                                       influence, -1.0);
+          }),
+          "tolerance -1"));
+    std::vector<uint32_t> bad = adjacency;
+    bad[3] = 7;
+    CHECK(contains(errorOf([&] {
+              penumbra::sampleBasedSoftSilhouetteMarks(positions.data(), positions.size(), bad.data(), 1, sets.frame, influence);
+          }),
+          "adjacency index 3 is 7"));
 }

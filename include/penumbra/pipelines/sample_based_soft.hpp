@@ -129,7 +129,8 @@ struct SoftSkips {
     /// Counted: pairs_cut.
     bool plane_cut = true;
     /// GPU only, off by default (it needs the casters with adjacency: the run's DrawAdjacency
-    /// callback, penumbra::triangleAdjacency): penumbrae come only from edges that are silhouettes
+    /// callback, penumbra::triangleAdjacency; sampleBasedSoftCpu ignores it, the marked texels'
+    /// twin is sampleBasedSoftSilhouetteMarks in penumbra/pipelines/silhouette_marks.hpp): penumbrae come only from edges that are silhouettes
     /// from some point of the light (laine2005 §3.3). An edge is a potential silhouette unless the
     /// whole light lies strictly in front of both its faces or strictly behind both (the faces
     /// oriented as one sheet across the edge; open and non-manifold edges always are). A silhouette
