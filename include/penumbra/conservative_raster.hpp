@@ -642,24 +642,55 @@ struct HullRaster {
 
 namespace detail {
 
+/// The convex hull (CCW, no repeated or collinear vertices) of `count` pixel-space vertices, in
+/// double. An emitted polygon is convex up to float rounding, but a dilated hull around a cluster
+/// of nearly equal points can come out with a reflex vertex a micro-pixel deep (two vertices
+/// 4e-6 px apart, seen on a silhouette edge clipped just short of the far plane). GL rasterizes
+/// the strip the geometry stage emits, whose triangles cover such a notch's neighbourhood; the
+/// half-planes of the polygon's own edges would not (a micro-pixel edge's line cuts off a wedge of
+/// the polygon). The hull differs from the strip's union only inside the notch, within any
+/// tolerance a test gives.
+inline std::vector<glm::dvec2> convexPixelHull(const glm::vec2* pixels, int count) {
+    std::vector<glm::dvec2> p(pixels, pixels + std::max(count, 0));
+    std::sort(p.begin(), p.end(), [](const glm::dvec2& a, const glm::dvec2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+    p.erase(std::unique(p.begin(), p.end()), p.end());
+    if (p.size() < 3) return p;
+    const auto cross = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+        return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+    };
+    std::vector<glm::dvec2> hull(2 * p.size());
+    size_t k = 0;
+    for (size_t i = 0; i < p.size(); ++i) {  // lower chain
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
+        hull[k++] = p[i];
+    }
+    for (size_t i = p.size() - 1, t = k + 1; i-- > 0;) {  // upper chain
+        while (k >= t && cross(hull[k - 2], hull[k - 1], p[i]) <= 0.0) --k;
+        hull[k++] = p[i];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
 /// GL's polygon rule on `count` CCW pixel-space vertices (centre strictly inside, or on a top or
 /// left edge) over a width x height viewport, optionally clipped to `box` (x0, y0, x1, y1); centres
-/// within `tolerance` of the boundary go to `uncertain`. Double on the float vertices. Shared by
-/// rasterizeConservativeHull and influenceRegionTexels.
+/// within `tolerance` of the boundary go to `uncertain`. Double on the float vertices, on their
+/// convex hull (convexPixelHull). Shared by rasterizeConservativeHull and influenceRegionTexels.
 inline HullRaster pixelRule(const glm::vec2* pixels, int count, int width, int height, const glm::dvec4* box,
                             double tolerance) {
     HullRaster out;
-    if (count < 3) return out;
-    // Polygon edges in CCW order, skipping zero-length ones; distances are exact up to double rounding.
+    const std::vector<glm::dvec2> hull = convexPixelHull(pixels, count);
+    if (hull.size() < 3) return out;
+    // Polygon edges in CCW order; distances are exact up to double rounding.
     struct Edge {
         glm::dvec2 a, n;  // point, unit outward normal
         bool top_left;
     };
     std::vector<Edge> edges;
     glm::dvec2 lo(1e300), hi(-1e300);
-    for (int i = 0; i < count; ++i) {
-        const glm::dvec2 a(pixels[i]);
-        const glm::dvec2 b(pixels[(i + 1) % count]);
+    for (size_t i = 0; i < hull.size(); ++i) {
+        const glm::dvec2 a = hull[i];
+        const glm::dvec2 b = hull[(i + 1) % hull.size()];
         lo = glm::min(lo, a);
         hi = glm::max(hi, a);
         const glm::dvec2 d = b - a;

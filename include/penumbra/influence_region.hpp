@@ -693,13 +693,15 @@ inline HullRaster influenceRegionTexels(const InfluenceRegion& region, const Inf
     return detail::pixelRule(region.pixels.data(), region.count, setup.width(), setup.height(), nullptr, tolerance);
 }
 
-/// GL's rule for one texel of the emitted polygon (double, on the float vertices).
+/// GL's rule for one texel of the emitted polygon (double, on the float vertices' convex hull:
+/// detail::convexPixelHull says why).
 inline bool influenceRegionCoversTexel(const InfluenceRegion& region, int x, int y) {
-    if (region.count < 3) return false;
+    const std::vector<glm::dvec2> hull = detail::convexPixelHull(region.pixels.data(), region.count);
+    if (hull.size() < 3) return false;
     const glm::dvec2 centre(x + 0.5, y + 0.5);
-    for (int i = 0; i < region.count; ++i) {
-        const glm::dvec2 a(region.pixels[static_cast<size_t>(i)]);
-        const glm::dvec2 b(region.pixels[static_cast<size_t>((i + 1) % region.count)]);
+    for (size_t i = 0; i < hull.size(); ++i) {
+        const glm::dvec2 a = hull[i];
+        const glm::dvec2 b = hull[(i + 1) % hull.size()];
         const glm::dvec2 d = b - a;
         if (d.x == 0.0 && d.y == 0.0) continue;
         const double outside = d.y * (centre.x - a.x) - d.x * (centre.y - a.y);  // > 0: outside (CCW)
