@@ -130,13 +130,13 @@ struct SoftSkips {
     bool plane_cut = true;
     /// GPU only, off by default (it needs the casters with adjacency: the run's DrawAdjacency
     /// callback, penumbra::triangleAdjacency; sampleBasedSoftCpu ignores it, the marked texels'
-    /// twin is sampleBasedSoftSilhouetteMarks in penumbra/pipelines/silhouette_marks.hpp): penumbrae come only from edges that are silhouettes
-    /// from some point of the light (laine2005 §3.3). An edge is a potential silhouette unless the
-    /// whole light lies strictly in front of both its faces or strictly behind both (the faces
-    /// oriented as one sheet across the edge; open and non-manifold edges always are). A silhouette
-    /// pass rasterizes every potential silhouette's influence region into a texel mask; view samples
-    /// of unmarked texels take one exact test from the light centre per caster, which sets all N
-    /// bits or none. Why nothing changes: as a light point moves over the light, whether its segment
+    /// twin is sampleBasedSoftSilhouetteMarks in penumbra/pipelines/silhouette_marks.hpp):
+    /// penumbrae come only from edges that are silhouettes from some point of the light
+    /// (laine2005 §3.3). An edge is a potential silhouette unless the whole light lies strictly in
+    /// front of both its faces or strictly behind both (the faces oriented as one sheet across the
+    /// edge; open and non-manifold edges always are). A silhouette pass rasterizes every potential
+    /// silhouette's influence region into a texel mask; view samples of unmarked texels take one
+    /// exact test from the light centre per caster, which sets all N bits or none. Why nothing changes: as a light point moves over the light, whether its segment
     /// to p meets the casters changes only where the segment crosses a silhouette edge, and outside
     /// every silhouette's region no segment from p to the light does; so every light sample has the
     /// centre's verdict, and the casters that block the centre are exactly those needed. Needs every
