@@ -672,8 +672,7 @@ void requireClean(const CoverageStats& s, bool expect_prediction = true) {
 }
 
 size_t defaultCount(size_t normal) {
-    const char* env = std::getenv("PENUMBRA_CONSERVATIVE_TRIANGLES");
-    return env && *env ? static_cast<size_t>(std::strtoull(env, nullptr, 10)) : normal;
+    return static_cast<size_t>(penumbra::test::envCount("PENUMBRA_CONSERVATIVE_TRIANGLES", static_cast<long>(normal)));
 }
 
 }  // namespace

@@ -345,10 +345,7 @@ void report(const Stats& st, const char* what) {
             st.max_excursion, " px; sampled-oracle checks ", st.sample_checks, ", inconsistent ", st.sample_inconsistent);
 }
 
-long envCount(long fallback) {
-    const char* e = std::getenv("PENUMBRA_INFLUENCE_CASES");
-    return e && *e ? std::strtol(e, nullptr, 10) : fallback;
-}
+long envCount(long fallback) { return penumbra::test::envCount("PENUMBRA_INFLUENCE_CASES", fallback); }
 
 }  // namespace
 

@@ -1178,10 +1178,7 @@ void silhouetteReport(const SilhouetteStats& st) {
             " emitted, ", st.receivers, " receivers whose segment to the light crosses an edge, misses ", st.misses);
 }
 
-long silhouetteCount(long fallback) {
-    const char* e = std::getenv("PENUMBRA_SILHOUETTE_CASES");
-    return e && *e ? std::strtol(e, nullptr, 10) : fallback;
-}
+long silhouetteCount(long fallback) { return penumbra::test::envCount("PENUMBRA_SILHOUETTE_CASES", fallback); }
 
 }  // namespace
 

@@ -5,6 +5,7 @@
 //                Every call prints the seed it returns, so a failure can be replayed.
 //   errorOf(f):  the message of the penumbra::Error f throws, or a marker when it throws none.
 //   contains():  substring test for error messages.
+//   envCount():  a case count from an environment variable (stress runs set it), else the default.
 #ifndef PENUMBRA_TESTS_SUPPORT_TEST_SUPPORT_HPP
 #define PENUMBRA_TESTS_SUPPORT_TEST_SUPPORT_HPP
 
@@ -35,6 +36,11 @@ inline uint32_t testSeed(uint32_t offset = 0) {
     seed += offset;
     MESSAGE("seed " << seed << " (replay: PENUMBRA_SEED=" << seed - offset << ")");
     return seed;
+}
+
+inline long envCount(const char* name, long fallback) {
+    const char* env = std::getenv(name);
+    return env && *env ? std::strtol(env, nullptr, 10) : fallback;
 }
 
 template <typename F>
