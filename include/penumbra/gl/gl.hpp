@@ -80,6 +80,26 @@ inline void setPassRasterState() {
     glProvokingVertex(GL_LAST_VERTEX_CONVENTION);
 }
 
+/// Which list blocks does the longest list need (the list-walking light passes: AliasFreeHard-
+/// and SampleBasedSoftShadows)? With the caller's block-predicate program, empty VAO, parameters
+/// and list header bound: per block b < `blocks` one point (vertex b) under the occlusion query
+/// `queries[b]` (any samples passed: some list reaches block b; the light pass of block b then
+/// renders under that query's condition). The points go through a 1 x 1 viewport, which puts each
+/// point (NDC origin) on pixel (0, 0)'s centre: in the grid's own viewport it would sit on a pixel
+/// corner whenever W and H are even, and whether a 1-pixel point there covers any pixel centre is
+/// the rasteriser's tie rule (no fragment would skip every light-pass block). Leaves the viewport
+/// at the grid's `width` x `height`.
+template <class Queries>
+inline void drawListBlockPredicates(const Queries& queries, uint32_t blocks, uint32_t width, uint32_t height) {
+    glViewport(0, 0, 1, 1);
+    for (uint32_t b = 0; b < blocks; ++b) {
+        glBeginQuery(GL_ANY_SAMPLES_PASSED, queries[b].id());
+        glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
+        glEndQuery(GL_ANY_SAMPLES_PASSED);
+    }
+    glViewport(0, 0, static_cast<GLsizei>(width), static_cast<GLsizei>(height));
+}
+
 /// The occupancy stencil of the list-walking light passes (AliasFreeHardOptions::
 /// skip_empty_texels, SoftSkips::empty_blocks) holds 8 bits per texel: blocks from this one on
 /// are drawn without it.
@@ -88,11 +108,12 @@ inline constexpr uint32_t kOccupancyStencilBlocks = 255;
 /// Fills `framebuffer`'s stencil (bound for drawing, viewport the grid) with each texel's count of
 /// non-empty list blocks: cleared to 0, then per block b < min(blocks, kOccupancyStencilBlocks) a
 /// full-screen triangle of `program` (whose fragments survive where block b holds samples) with
-/// GL_INCR, under `begin_block(b)` / `end_block(b)` (the caller's parameters and conditional
-/// render). Leaves GL_STENCIL_TEST on, write mask 0, operations GL_KEEP; `program` and `vao` bound.
-template <class BeginBlock, class EndBlock>
-inline void drawOccupancyStencil(GLuint framebuffer, GLuint program, GLuint vao, uint32_t blocks, BeginBlock&& begin_block,
-                                 EndBlock&& end_block) {
+/// GL_INCR, after `bind_block(b)` (the caller's parameters of block b) and under the condition of
+/// `queries[b]` (drawListBlockPredicates: blocks no list needs draw nothing). Leaves
+/// GL_STENCIL_TEST on, write mask 0, operations GL_KEEP; `program` and `vao` bound.
+template <class Queries, class BindBlock>
+inline void drawOccupancyStencil(GLuint framebuffer, GLuint program, GLuint vao, const Queries& queries, uint32_t blocks,
+                                 BindBlock&& bind_block) {
     glStencilMask(0xFFu);
     const GLint clear = 0;
     glClearNamedFramebufferiv(framebuffer, GL_STENCIL, 0, &clear);
@@ -102,9 +123,10 @@ inline void drawOccupancyStencil(GLuint framebuffer, GLuint program, GLuint vao,
     glUseProgram(program);
     glBindVertexArray(vao);
     for (uint32_t b = 0; b < blocks && b < kOccupancyStencilBlocks; ++b) {
-        begin_block(b);
+        glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
+        bind_block(b);
         glDrawArrays(GL_TRIANGLES, 0, 3);
-        end_block(b);
+        glEndConditionalRender();
     }
     glStencilMask(0u);
     glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);

@@ -394,29 +394,14 @@ private:
         glBindVertexArray(empty_vao_.id());
         bindParams(0);
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
-        // A 1 x 1 viewport puts each point (NDC origin) on pixel (0, 0)'s centre. In the grid's own
-        // viewport it would sit on a pixel corner whenever W and H are even, and whether a 1-pixel
-        // point there covers any pixel centre is the rasteriser's tie rule: no fragment would skip
-        // every light-pass block.
-        glViewport(0, 0, 1, 1);
-        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-            glBeginQuery(GL_ANY_SAMPLES_PASSED, block_queries_[b].id());
-            glDrawArrays(GL_POINTS, static_cast<GLint>(b), 1);
-            glEndQuery(GL_ANY_SAMPLES_PASSED);
-        }
-        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+        gl::drawListBlockPredicates(block_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
         // (3b) skip_empty_texels: the stencil counts each texel's non-empty list blocks.
         const bool stencil = options_.skip_empty_texels;
         if (stencil) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-            gl::drawOccupancyStencil(
-                framebuffer_.id(), occupancy_.id(), empty_vao_.id(), options_.max_list_blocks,
-                [&](uint32_t b) {
-                    glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-                    bindParams(1 + 2 * b + 1);
-                },
-                [](uint32_t) { glEndConditionalRender(); });
+            gl::drawOccupancyStencil(framebuffer_.id(), occupancy_.id(), empty_vao_.id(), block_queries_, options_.max_list_blocks,
+                                     [&](uint32_t b) { bindParams(1 + 2 * b + 1); });
         }
         // (4) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
         // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
