@@ -53,7 +53,10 @@
 //                                    exact_tests, uncertain_bits
 //                                    (fraction of the pairs' bits the certified LUT left to the
 //                                    exact test), tests_per_sample (pairs / surface samples),
-//                                    overflow, max_list_length.
+//                                    overflow, max_list_length, pairs_deferred ((triangle,
+//                                    texel) pairs the compute pass worked: deferred_pairs, sized
+//                                    W * H * 128 here, at most 16 776 960), deferral_fallbacks
+//                                    (passes drawn again by the fragment stage after an overflow).
 //   BM_SoftShadowsNScaling           exact and lut at N = 128 and 1024, all four interleaved:
 //                                    n1024_over_n128 = ms_exact_n1024 / ms (exact at 128; target
 //                                    <= 1.5, the seed's Fig. 13 ~2), n1024_over_n128_lut.
@@ -363,6 +366,10 @@ struct Ours {
         o.grid_width = o.grid_height = sizes().grid;
         o.max_list_blocks = 256;  // lists up to 4096 samples (the ground seen at a grazing angle)
         o.count_work = count_work;
+        // Deferred pairs sized to the view as an engine would (the scenes here take 20-60 texel
+        // pairs per view sample; a draw that overflows is drawn again by the fragment stage).
+        o.deferred_pairs = std::min<uint32_t>(65535u * 256u, std::max<uint32_t>(o.deferred_pairs, sizes().width * sizes().height * 128u));
+        o.deferred_triangles = 1u << 18;
         return o;
     }
     Ours(const View& view, const LightConfig& c, const Lut& lut, SoftMode m, bool count_work)
@@ -446,6 +453,8 @@ void setWork(benchmark::State& state, const View& v, const LightConfig& c, const
     state.counters["tests_per_sample"] = double(f.pairs) / double(v.surface.size());
     state.counters["overflow"] = double(f.overflow);
     state.counters["max_list_length"] = double(f.statistics.max_list_length);
+    state.counters["pairs_deferred"] = double(f.pairs_deferred);
+    state.counters["deferral_fallbacks"] = double(f.deferral_fallbacks);
 }
 
 void setScene(benchmark::State& state, const View& v, uint32_t n) {

@@ -21,7 +21,11 @@
 //   hard (penumbra/gl/pipelines/alias_free_hard.hpp, AliasFreeHardOptions):
 //     cull = light_facing_only, fit = fit_frustum, shadowed = skip_shadowed, box = clip_to_box,
 //     empty = skip_empty_texels (the occupancy stencil).
-//   Methods of an entry: off (every skip off), each skip alone, all (every skip on).
+//   Methods of an entry: off (every skip off), each skip alone, all (every skip on); soft entries
+//   also off_fragment and all_fragment: off and all with SampleBasedSoftGpuOptions::deferred_pairs
+//   = 0 (the light pass's pairs worked in its fragment stage; every other method defers them to
+//   the compute pass, the default); counters deferral_speedup = ms_all_fragment / ms_all and
+//   fragment_off_over_all = ms_off_fragment / ms_all_fragment (the skips' speed-up without deferral).
 //
 // BM_SoftSkips/<scene>: the scene's camera view rendered into a W x H G-buffer
 // (penumbra/scene/gl_scene.hpp); every pixel is a view sample, its position lifted along its face
@@ -61,7 +65,8 @@
 //   soft work, from a separate untimed run per method with count_work = true:
 //     pairs_<m>, fragments_<m>, fragments_skipped_<m>, triangles_culled_<m>, pairs_cut_<m>, pairs_hard_<m>,
 //     pairs_recovered_<m>,
-//     exact_tests_<m>, passes_<m>, overflow_<m> (samples past the last list block: untested)
+//     exact_tests_<m>, passes_<m>, overflow_<m> (samples past the last list block: untested),
+//     pairs_deferred_<m> ((triangle, texel) pairs the compute pass worked)
 //   hard work, likewise: fragments_<m>, tests_<m>, triangles_emitted_<m>, passes_<m>, overflow_<m>
 //   scene: samples (surface view samples), triangles, closed_triangles (of closed meshes: what
 //   cull may act on), grid, N, lut_resolution, fit_valid, unfitted_scene_box (soft).
@@ -213,6 +218,7 @@ struct SoftMethod {
     penumbra::SoftSkips skips;
     bool fit = false;  ///< §4.3-fitted light grid
     bool cut = false;  ///< InfluenceRegionOptions::cut_by_supporting_plane (with skips.plane_cut)
+    uint32_t deferred_pairs = penumbra::SampleBasedSoftGpuOptions{}.deferred_pairs;  ///< its default but in all_fragment
 };
 
 std::vector<SoftMethod> softMethods() {
@@ -227,7 +233,12 @@ std::vector<SoftMethod> softMethods() {
     fit.fit = true;
     silhouette.skips.silhouettes = true;
     all.skips.empty_blocks = all.skips.closed_casters = all.skips.plane_cut = all.skips.silhouettes = true;
-    return {off, empty, cull, cut, fit, silhouette, all};
+    // The same two with every pair worked in the light pass's fragment stage (deferred_pairs = 0).
+    SoftMethod off_fragment = off, all_fragment = all;
+    off_fragment.name = "off_fragment";
+    all_fragment.name = "all_fragment";
+    off_fragment.deferred_pairs = all_fragment.deferred_pairs = 0;
+    return {off, empty, cull, cut, fit, silhouette, all, off_fragment, all_fragment};
 }
 
 /// One scene seen through the soft G-buffer, its light samples, LUT and both light grids.
@@ -351,6 +362,7 @@ struct SoftRun {
         o.max_list_blocks = 256;  // lists up to 4096 samples (the ground seen at a grazing angle)
         o.count_work = count_work;
         o.skips = m.skips;
+        o.deferred_pairs = m.deferred_pairs;
         return o;
     }
     SoftRun(const SoftScene& scene, const SoftMethod& m, bool count_work)
@@ -382,7 +394,11 @@ void BM_SoftSkips(benchmark::State& state, const SceneSpec& spec) {
             SoftRun* r = runs.back().get();
             methods.push_back({m.name, [r] { r->run(); }});
         }
-        timeMethods(state, methods);
+        const std::vector<double> ms_soft = timeMethods(state, methods);
+        // Methods ..., all, off_fragment, all_fragment.
+        const double ms_all = ms_soft[ms.size() - 3], ms_off_fragment = ms_soft[ms.size() - 2], ms_all_fragment = ms_soft.back();
+        state.counters["deferral_speedup"] = ms_all > 0.0 ? ms_all_fragment / ms_all : 0.0;
+        state.counters["fragment_off_over_all"] = ms_all_fragment > 0.0 ? ms_off_fragment / ms_all_fragment : 0.0;
         gl::checkErrors("skips_bench (soft)");
         for (size_t k = 0; k < runs.size(); ++k) {
             if (!runs[k]->ok) {
@@ -413,6 +429,7 @@ void BM_SoftSkips(benchmark::State& state, const SceneSpec& spec) {
             state.counters["exact_tests_" + m.name] = double(f.exact_tests);
             state.counters["passes_" + m.name] = double(f.passes);
             state.counters["overflow_" + m.name] = double(f.overflow);
+            state.counters["pairs_deferred_" + m.name] = double(f.pairs_deferred);
         }
         state.counters["samples"] = double(s.surface);
         state.counters["triangles"] = double(s.scene.triangleCount());

@@ -313,6 +313,17 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
         penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, nullptr, influence, vp); }), "differs"));
     options.grid_width = 32;
     options.mode = penumbra::SoftMode::Lut;
+    // Deferred pairs beyond one dispatch's groups, and triangle slots beyond the same bound.
+    options.deferred_pairs = 65535u * 256u + 1u;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
+        "deferred_pairs = 16776961"));
+    options.deferred_pairs = 1024;
+    options.deferred_triangles = (1u << 24) + 1u;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
+        "deferred_triangles = 16777217"));
+    options.deferred_pairs = options.deferred_triangles = 0;
     penumbra::SampleBasedSoftShadows pipeline(options, sets, &seed_lut, influence, vp);
     const penumbra::gl::Buffer positions(16 * 4);
     const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
@@ -675,5 +686,87 @@ TEST_CASE("SoftSkips::silhouettes: the GPU's texel marks == the CPU twin's (samp
         CHECK(marked < gpu.size());  // some texel lies outside every region
         CHECK(missed == 0);
         CHECK(extra == 0);
+    }
+}
+
+TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and counters, past its capacities too") {
+    penumbra::test::context();
+    // Every skip on (closed casters' second pass included: its pairs are worked after the first
+    // pass's), in every mode; capacities large enough for every pair, and small ones: the draws
+    // that overflow them are drawn again by the fragment-stage program.
+    struct Capacity {
+        uint32_t pairs, triangles;
+    };
+    for (const std::string name : {"columns", "torus_knot"}) {
+        const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
+        const uint32_t n = 128;
+        const penumbra::test::GlSoftLight soft(w, 64, 128, n);
+        const penumbra::SampleDepthInput input = w.depthInput();
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Lut, penumbra::SoftMode::Brute}) {
+            const std::string mode_name = penumbra::softModeName(mode);
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            if (brute && name != "columns") continue;  // the same code as Exact's all-exact pairs; slow
+            const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : soft.table();
+            const auto run = [&](Capacity capacity, penumbra::SampleBasedSoftFrame* frame) {
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 128;
+                options.list_block = 8;  // several list blocks: pairs of every block in one dispatch
+                options.skips.closed_casters = options.skips.silhouettes = true;
+                options.deferred_pairs = capacity.pairs;
+                options.deferred_triangles = capacity.triangles;
+                penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
+                                                          w.light.view_projection);
+                pipeline.reserve(w.samples());
+                pipeline.validate(input, table);
+                REQUIRE(pipeline.run(input, table, [&](penumbra::CasterClass c) { w.drawClass(c); }, {},
+                                     [&] { w.gpu.drawAdjacency(); }) == Status::Ok);
+                *frame = pipeline.readFrame();
+                penumbra::gl::checkErrors("deferred pairs");
+                return pipeline.readMasks();
+            };
+            penumbra::SampleBasedSoftFrame off;
+            const std::vector<uint32_t> off_masks = run({0, 0}, &off);
+            CHECK(std::count_if(off_masks.begin(), off_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
+            CHECK(off.pairs_deferred == 0);
+            CHECK(off.deferral_fallbacks == 0);
+            const uint64_t worked = off.fragments - off.fragments_skipped;  // fragments past the early returns
+            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18}, Capacity{64, 1u << 18}, Capacity{1u << 20, 16}}) {
+                if (brute && capacity.pairs == 64) break;  // the redraw does not depend on the mode: exact and lut test it
+                CAPTURE(name);
+                CAPTURE(mode_name);
+                CAPTURE(capacity.pairs);
+                CAPTURE(capacity.triangles);
+                penumbra::SampleBasedSoftFrame on;
+                const std::vector<uint32_t> on_masks = run(capacity, &on);
+                MESSAGE(name, " ", mode_name, ", capacity ", capacity.pairs, " pairs / ", capacity.triangles,
+                        " triangles: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs, ", exact tests ",
+                        on.exact_tests, ", recovered ", on.pairs_recovered, "; texel pairs deferred ", on.pairs_deferred,
+                        " of ", worked, ", fallbacks ", on.deferral_fallbacks);
+                CHECK(on.passes > 1);
+                if (capacity.pairs >= (1u << 20) && capacity.triangles >= (1u << 18)) {
+                    CHECK(on.pairs_deferred == worked);  // every pair in the compute pass
+                    CHECK(on.deferral_fallbacks == 0);
+                } else {
+                    // The first pass overflows and is drawn again; the second's few pairs fit.
+                    CHECK(on.deferral_fallbacks >= 1);
+                    CHECK(on.pairs_deferred < worked);
+                }
+                CHECK(on_masks == off_masks);
+                CHECK(on.fragments == off.fragments);
+                CHECK(on.fragments_skipped == off.fragments_skipped);
+                CHECK(on.pairs == off.pairs);
+                CHECK(on.pairs_ignored == off.pairs_ignored);
+                CHECK(on.pairs_unproven == off.pairs_unproven);
+                CHECK(on.uncertain_bits == off.uncertain_bits);
+                CHECK(on.exact_tests == off.exact_tests);
+                CHECK(on.planes_unproven == off.planes_unproven);
+                CHECK(on.triangles_culled == off.triangles_culled);
+                CHECK(on.pairs_cut == off.pairs_cut);
+                CHECK(on.pairs_hard == off.pairs_hard);
+                CHECK(on.pairs_recovered == off.pairs_recovered);
+                CHECK(on.pairs_front == off.pairs_front);
+            }
+        }
     }
 }

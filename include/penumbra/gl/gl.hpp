@@ -50,6 +50,13 @@ inline GLint getInteger(GLenum name) {
     return value;
 }
 
+/// glGetInteger64v as a value.
+inline GLint64 getInteger64(GLenum name) {
+    GLint64 value = 0;
+    glGetInteger64v(name, &value);
+    return value;
+}
+
 /// glGetIntegeri_v as a value.
 inline GLint getInteger(GLenum name, GLuint index) {
     GLint value = 0;

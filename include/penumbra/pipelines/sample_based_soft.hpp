@@ -647,6 +647,23 @@ struct SampleBasedSoftGpuOptions {
     /// on the draws of CasterClass::Closed only.
     SoftSkips skips{};
     bool count_work = true;  ///< work counters (atomics in the light pass)
+    /// Deferred pairs: capacity, in (caster triangle, light texel) pairs, of a buffer the light
+    /// pass's fragment stage appends its pairs to instead of working them; a compute pass then does
+    /// the same work per pair (light_pass.comp.glsl), densely packed, after the light pass's draws
+    /// (and again after the closed casters' second pass). Draws that append more pairs than this, or
+    /// need more triangle slots than deferred_triangles, are drawn again with the fragment-stage
+    /// program instead (decided on the GPU; SampleBasedSoftFrame::deferral_fallbacks counts them):
+    /// every capacity gives the same bits and counters. 8 bytes per pair (default 2^20: 8 MiB);
+    /// 0 = off, every pair in the fragment stage (no compute pass, one program fewer). Why:
+    /// fragments run in 2 x 2 quads and rasteriser tiles, partly idle at the influence regions'
+    /// edges; llvmpipe runs a fragment shader's every instruction for its masked-off lanes too;
+    /// and some GPUs shade fragments far slower than they run compute (an H200's fragment
+    /// arithmetic measured ~30x slower). On llvmpipe the soft pass ran 2.2-2.7x faster with every
+    /// skip on (BM_SoftSkips: all_fragment against all).
+    uint32_t deferred_pairs = 1u << 20;
+    /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
+    /// that emits an influence region; 40 bytes each). 0: deferred_pairs / 4 (10 MiB by default).
+    uint32_t deferred_triangles = 0;
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
     bool timings = false;
@@ -668,6 +685,11 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    o.plane_budget, " must be in (0, 0.5]");
     PENUMBRA_CHECK(o.rotations >= 1 && o.rotations <= 256, "penumbra::SampleBasedSoftShadows: rotations = ", o.rotations,
                    " must be in [1, 256]");
+    // The pairs' group count must fit one dispatch (GL's minimum 65 535 groups of 64).
+    PENUMBRA_CHECK(o.deferred_pairs <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_pairs = ", o.deferred_pairs,
+                   " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
+    PENUMBRA_CHECK(o.deferred_triangles <= (1u << 24), "penumbra::SampleBasedSoftShadows: deferred_triangles = ",
+                   o.deferred_triangles, " must be at most 16777216");
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one

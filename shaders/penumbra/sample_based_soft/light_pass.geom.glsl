@@ -6,8 +6,14 @@
 // penumbra/alias_free_hard/degenerate.glsl) cast nothing and are culled here.
 // Defines: the influence setup's (PENUMBRA_INFLUENCE_SIDES, PENUMBRA_INFLUENCE_CUT), PENUMBRA_SBS_COUNT_WORK.
 // Closed casters' triangles with the whole light behind them are culled here (SoftSkips::closed_casters).
+// PENUMBRA_SBS_DEFERRED (deferred pairs): a triangle that emits a region takes a slot in the
+// triangles buffer and stores its world vertices there for the compute pass (light_pass.comp.glsl);
+// with no slot left it passes PENUMBRA_SBS_NO_TRIANGLE, and its fragments flag the draws as
+// overflowed (count_work's complement draw takes no slot: its fragments all return at once). Its
+// culled-triangle count waits in the deferral buffer as the fragment stage's counters do.
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_DEFERRED=1
 #include "penumbra/influence_region/influence_region_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 #include "penumbra/alias_free_hard/degenerate.glsl"
@@ -19,6 +25,9 @@
 
 #ifndef PENUMBRA_INFLUENCE_SIDES
 #define PENUMBRA_INFLUENCE_SIDES PENUMBRA_INFLUENCE_DEFAULT_SIDES
+#endif
+#ifndef PENUMBRA_SBS_DEFERRED
+#define PENUMBRA_SBS_DEFERRED 0
 #endif
 
 layout(triangles) in;
@@ -35,11 +44,17 @@ layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsB
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
 #endif
 
+#if PENUMBRA_SBS_DEFERRED
+layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
+layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) writeonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
+#endif
+
 #include "penumbra/influence_region/influence_region.glsl"
 
 layout(location = 0) flat out vec3 penumbraSbsVertex0;
 layout(location = 1) flat out vec3 penumbraSbsVertex1;
 layout(location = 2) flat out vec3 penumbraSbsVertex2;
+layout(location = 3) flat out uint penumbraSbsTriangle;
 
 void main() {
     const vec3 v0 = gl_in[0].gl_Position.xyz, v1 = gl_in[1].gl_Position.xyz, v2 = gl_in[2].gl_Position.xyz;
@@ -55,14 +70,34 @@ void main() {
         const bool away = penumbraSbsCasterFacesAway(c);
         if (away != culled_pass) {
 #if PENUMBRA_SBS_COUNT_WORK
-            if (away && penumbraSbsParams.grid.w == 0u && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u)
+            if (away && penumbraSbsParams.grid.w == 0u && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
+#if PENUMBRA_SBS_DEFERRED
+                atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+#else
                 atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+#endif
+            }
 #endif
             return;
         }
     }
     const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
     const vec2 half_grid = 0.5 * penumbraSbsInfluence.grid.xy;
+    uint slot = PENUMBRA_SBS_NO_TRIANGLE;
+#if PENUMBRA_SBS_DEFERRED
+    if (count > 0 && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
+        const uint k = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES], 1u);
+        if (k < uint(penumbraSbsTriangles.length()) / PENUMBRA_SBS_TRIANGLE_WORDS) {
+            // The vertices' bits, then the draw's list block and flags (what the compute pass needs
+            // of this draw's parameter block).
+            slot = k;
+            const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * k;
+            const vec3 v[3] = vec3[3](v0, v1, v2);
+            for (uint i = 0u; i < 9u; ++i) penumbraSbsTriangles[base + i] = floatBitsToUint(v[i / 3u][i % 3u]);
+            penumbraSbsTriangles[base + 9u] = penumbraSbsParams.grid.w | penumbraSbsParams.reserved.y << 16u;
+        }
+    }
+#endif
     // The convex polygon as a zig-zag strip: 0, 1, n-1, 2, n-2, ... (as influence_region.geom.glsl).
     for (int j = 0; j < count; ++j) {
         const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
@@ -70,6 +105,7 @@ void main() {
         penumbraSbsVertex0 = v0;
         penumbraSbsVertex1 = v1;
         penumbraSbsVertex2 = v2;
+        penumbraSbsTriangle = slot;
         EmitVertex();
     }
     EndPrimitive();

@@ -52,6 +52,18 @@
 #ifndef PENUMBRA_SBS_HEADER_BINDING
 #define PENUMBRA_SBS_HEADER_BINDING 5     // the lists' header (block predicate pass only)
 #endif
+// Deferred pairs (SampleBasedSoftGpuOptions::deferred_pairs): the geometry stage stores each
+// triangle's world vertices, the fragment stage appends (triangle, texel) pairs, a compute pass
+// does their work (light_pass.comp.glsl).
+#ifndef PENUMBRA_SBS_DEFERRAL_BINDING
+#define PENUMBRA_SBS_DEFERRAL_BINDING 11  // uint[PENUMBRA_SBS_DEFERRAL_WORDS]: counters and dispatch arguments
+#endif
+#ifndef PENUMBRA_SBS_PAIRS_BINDING
+#define PENUMBRA_SBS_PAIRS_BINDING 12     // uvec2[deferred_pairs]: (triangle slot, texel x | y << 16)
+#endif
+#ifndef PENUMBRA_SBS_TRIANGLES_BINDING
+#define PENUMBRA_SBS_TRIANGLES_BINDING 13  // uint[PENUMBRA_SBS_TRIANGLE_WORDS * deferred_triangles]: per slot
+#endif
 // Resolve.
 #ifndef PENUMBRA_SBS_SLOTS_BINDING
 #define PENUMBRA_SBS_SLOTS_BINDING 0
@@ -101,7 +113,22 @@
 #define PENUMBRA_SBS_WORK_PAIRS_HARD 11        // pairs outside every silhouette's region: one test from the centre
 #define PENUMBRA_SBS_WORK_PAIRS_RECOVERED 12   // culled casters' pairs evaluated after all (near receivers)
 #define PENUMBRA_SBS_WORK_PAIRS_FRONT 13       // pairs with the whole light in front of one (proven) plane: no table read
+#define PENUMBRA_SBS_WORK_DEFERRED 14          // deferred pairs: (triangle, texel) pairs the compute pass worked
+#define PENUMBRA_SBS_WORK_FALLBACKS 15         // deferred pairs: draws redrawn by the fragment stage (overflow)
 #define PENUMBRA_SBS_WORK_WORDS 16
+
+// The deferral buffer's words (PENUMBRA_SBS_DEFERRAL_BINDING).
+#define PENUMBRA_SBS_DEFERRAL_PAIRS 0        // pairs appended since the last dispatch (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_TRIANGLES 1    // triangle slots taken since the last dispatch (may exceed theirs)
+#define PENUMBRA_SBS_DEFERRAL_DISPATCHED 2   // pairs the compute pass reads (0 when the draws overflowed)
+#define PENUMBRA_SBS_DEFERRAL_OVERFLOW 3     // set by a fragment whose triangle got no slot
+#define PENUMBRA_SBS_DEFERRAL_ARGS 4         // 3 words: glDispatchComputeIndirect's group counts
+#define PENUMBRA_SBS_DEFERRAL_FALLBACK 7     // the last draws overflowed: the fragment stage redraws them
+#define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws
+#define PENUMBRA_SBS_DEFERRAL_WORDS 24
+#define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
+#define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
+#define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16
 
 // Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.
 #define PENUMBRA_SBS_FLAG_SKIP_EMPTY 1u      // empty list blocks return before the caster's setup

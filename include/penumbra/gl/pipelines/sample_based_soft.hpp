@@ -11,7 +11,8 @@
 // Integration summary
 //   needs:    GL 4.5 with fp64 in shaders (the planes and the exact test are fp64 in every mode),
 //             geometry shaders, 8 fragment-stage storage blocks plus one each for count_work,
-//             skips.closed_casters and skips.silhouettes (checked at construction);
+//             skips.closed_casters and skips.silhouettes, and with deferred_pairs (the default)
+//             2-3 in the geometry stage and as many plus 3 in compute (checked at construction);
 //             shaders penumbra/sample_based_soft/*, penumbra/alias_free_hard/{caster_position,
 //             blocker_test,degenerate}.glsl and blocks.vert.glsl, penumbra/influence_region/*,
 //             penumbra/light_lut/lookup.glsl, penumbra/sample_lists/*.
@@ -37,7 +38,8 @@
 //             program is bound: Closed = watertight outward-oriented meshes (SoftSkips::
 //             closed_casters culls their triangles that face away from the whole light), Open =
 //             the rest. options.skips: the work skips (SoftSkips), none of which changes a bit of
-//             Exact or Brute.
+//             Exact or Brute. options.deferred_pairs: the light pass's pair work in a compute pass
+//             instead of its fragment stage (same bits and counters).
 //   produces: per view-sample id `words = ceil(N / 32)` mask words (bit s of word id * words +
 //             s / 32: light sample s of its set blocked) in masks() or your range, and the visible
 //             fraction 1 - popcount / N as a float per id (PENUMBRA_SBS_VISIBILITY_NO_SAMPLE /
@@ -57,10 +59,15 @@
 //             test GL_LESS b and early fragment tests cull empty blocks' fragments before they are
 //             shaded, blocks 0..254; count_work draws the culled ones once more, GL_GEQUAL b, to
 //             count them); the geometry stage culls (skips) and emits the influence region, each
-//             fragment walks its texel's list block (see light_pass.frag.glsl); with
-//             skips.closed_casters then once more per block with Closed (the culled triangles, for
-//             the receivers that need them), (4) resolve. Nothing is read back, queried, allocated or
-//             thrown: misuse returns a Status.
+//             fragment walks its texel's list block (light_pass_work.glsl) or, with deferred_pairs,
+//             appends (triangle slot, texel) for (3b) the compute pass: a one-invocation dispatch
+//             turns the count into group counts, glDispatchComputeIndirect works every appended pair
+//             (light_pass.comp.glsl); when the draws overflowed the pairs buffer or the triangle
+//             slots, nothing is dispatched and a second set of list-block predicates (one point
+//             per block, true only then) draws the same blocks again with the fragment-stage
+//             program; with skips.closed_casters then once more per block with Closed (the culled
+//             triangles, for the receivers that need them) and (3b) again, (4) resolve. Nothing
+//             is read back, queried, allocated or thrown: misuse returns a Status.
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
@@ -68,7 +75,8 @@
 // at the end) with skips.empty_blocks, the rasterizer state of gl::setPassRasterState (scissor test off, polygon fill, clip
 // distances off, clip control lower-left / -1..1, ...: the engine's leftovers cannot clip the
 // passes), the vertex-array binding (its own empty VAO during the predicate and occupancy passes; then whatever
-// your callback binds), the uniform-buffer bindings and SSBO bindings of SbsBindings, and
+// your callback binds), the uniform-buffer bindings and SSBO bindings of SbsBindings, the
+// GL_DISPATCH_INDIRECT_BUFFER binding (the deferral buffer, with deferred_pairs), and
 // whatever the sample-list builder and scanner bind. Your callback must leave the light pass's
 // SSBO bindings alone. Ends with GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT.
 #ifndef PENUMBRA_GL_PIPELINES_SAMPLE_BASED_SOFT_HPP
@@ -110,6 +118,9 @@ struct SbsBindings {
     uint32_t resolve_offsets = PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING;
     uint32_t marks = PENUMBRA_SBS_MARKS_BINDING;  ///< SoftSkips::silhouettes
     uint32_t near_samples = PENUMBRA_SBS_NEAR_BINDING;  ///< SoftSkips::closed_casters
+    uint32_t deferral = PENUMBRA_SBS_DEFERRAL_BINDING;    ///< deferred pairs: counters and dispatch arguments
+    uint32_t pairs = PENUMBRA_SBS_PAIRS_BINDING;          ///< deferred pairs: (triangle slot, texel)
+    uint32_t triangles = PENUMBRA_SBS_TRIANGLES_BINDING;  ///< deferred pairs: triangle slots
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -139,6 +150,13 @@ struct SampleBasedSoftFrame {
     /// Pairs decided at once because the whole light lies in front of one (in Exact: proven) plane
     /// of the pair: no LUT table read (Lut and Exact).
     uint64_t pairs_front = 0;
+    /// Deferred pairs (options.deferred_pairs): (caster triangle, light texel) pairs the compute pass
+    /// worked: when no draw overflowed, the fragments but those skipped and those of empty list
+    /// blocks (with SoftSkips::empty_blocks off; their walk would be empty).
+    uint64_t pairs_deferred = 0;
+    /// Deferred pairs: passes (the first, the closed casters' second) that overflowed the pairs
+    /// buffer or the triangle slots and were drawn again with the fragment-stage program.
+    uint64_t deferral_fallbacks = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -197,12 +215,57 @@ public:
             {"PENUMBRA_SBS_SETS_BINDING", b.sets},           {"PENUMBRA_SBS_HEADER_BINDING", b.header},
             {"PENUMBRA_SBS_SLOTS_BINDING", b.slots},         {"PENUMBRA_SBS_TEXELS_BINDING", b.texels},
             {"PENUMBRA_SBS_VISIBILITY_BINDING", b.visibility}, {"PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING", b.resolve_offsets},
-            {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples}};
+            {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples},
+            {"PENUMBRA_SBS_DEFERRAL_BINDING", b.deferral},   {"PENUMBRA_SBS_PAIRS_BINDING", b.pairs},
+            {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
+        const bool deferred = options_.deferred_pairs > 0;
+        ShaderDefines light_defines = defines;
+        light_defines.push_back({"PENUMBRA_SBS_DEFERRED", deferred ? "1" : "0"});
         light_pass_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
                                         "penumbra/sample_based_soft/light_pass.geom.glsl",
                                         "penumbra/sample_based_soft/light_pass.frag.glsl"},
-                                       defines, library);
+                                       light_defines, library);
+        if (deferred) {
+            // Deferred pairs: the geometry stage stores triangles (two more storage blocks), the
+            // fragment stage appends pairs, a compute pass works them (checked here, throws); the
+            // program without deferral redraws the draws that overflow, under predicates of its own.
+            const GLint compute_blocks = gl::getInteger(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS);
+            const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
+            PENUMBRA_CHECK(geometry_blocks >= (options_.count_work ? 3 : 2) && compute_blocks >= needed + 3,
+                           "penumbra::SampleBasedSoftShadows: deferred_pairs needs ", options_.count_work ? 3 : 2,
+                           " geometry and ", needed + 3, " compute storage blocks; the driver has ", geometry_blocks, " and ",
+                           compute_blocks, "; set deferred_pairs = 0");
+            const uint32_t triangles = options_.deferred_triangles ? options_.deferred_triangles
+                                                                   : std::max<uint32_t>(1, options_.deferred_pairs / 4);
+            const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
+            const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8;
+            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS;
+            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block,
+                           "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
+                           " bytes) and ", triangles, " triangle slots (", triangle_bytes,
+                           " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
+            ShaderDefines args_defines = defines;
+            args_defines.push_back({"PENUMBRA_SBS_DEFERRAL_CAPACITY", std::to_string(options_.deferred_pairs) + "u"});
+            light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
+            deferral_args_ =
+                gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", args_defines, library);
+            ShaderDefines fragment_defines = defines;
+            fragment_defines.push_back({"PENUMBRA_SBS_DEFERRED", "0"});
+            light_fragment_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
+                                                "penumbra/sample_based_soft/light_pass.geom.glsl",
+                                                "penumbra/sample_based_soft/light_pass.frag.glsl"},
+                                               fragment_defines, library);
+            ShaderDefines fallback_defines = defines;
+            fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
+            fallback_blocks_ = gl::buildProgram(
+                {"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"}, fallback_defines,
+                library);
+            for (uint32_t q = 0; q < options_.max_list_blocks; ++q) fallback_queries_.push_back(gl::OcclusionQuery::create());
+            deferral_ = gl::Buffer(PENUMBRA_SBS_DEFERRAL_WORDS * 4);
+            pairs_ = gl::Buffer(pair_bytes);
+            triangles_ = gl::Buffer(triangle_bytes);
+        }
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
@@ -344,6 +407,8 @@ public:
         f.pairs_hard = w[PENUMBRA_SBS_WORK_PAIRS_HARD];
         f.pairs_recovered = w[PENUMBRA_SBS_WORK_PAIRS_RECOVERED];
         f.pairs_front = w[PENUMBRA_SBS_WORK_PAIRS_FRONT];
+        f.pairs_deferred = w[PENUMBRA_SBS_WORK_DEFERRED];
+        f.deferral_fallbacks = w[PENUMBRA_SBS_WORK_FALLBACKS];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
@@ -365,7 +430,11 @@ public:
     BufferRange visibility() const { return {visibility_.id(), 0, visibility_.size()}; }
     SampleListsBuffers buffers() const { return lists_.ranges(); }
     const SampleListsSetup& setup() const { return setup_; }
+    /// The light pass's program (with deferred_pairs the deferring one) and, with deferred_pairs, the
+    /// fragment-stage program that redraws overflowing draws (0 otherwise): your DrawCasters runs
+    /// with either bound.
     GLuint lightPassProgram() const { return light_pass_.id(); }
+    GLuint fallbackLightPassProgram() const { return light_fragment_.id(); }
     uint32_t reservedSamples() const { return reserved_; }
     /// The light grid's view-projection (the influence setup's, which the lists use too).
     const glm::mat4& viewProjection() const { return vp_; }
@@ -381,6 +450,11 @@ private:
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
     gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_;
+    // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
+    // program and the list-block predicates of the redraw after an overflow.
+    gl::Program light_compute_, deferral_args_, light_fragment_, fallback_blocks_;
+    gl::Buffer deferral_, pairs_, triangles_;
+    std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
     /// pass), closed for count_work's complement draw.
@@ -449,6 +523,62 @@ private:
                           sizeof(SbsParams));
     }
 
+    /// Deferred pairs, after `pass` drew with the deferring program: the pairs it appended worked by
+    /// the compute pass (group counts written on the GPU: nothing read back), or, when it overflowed
+    /// the pairs buffer or the triangle slots, `pass` drawn again with the fragment-stage program
+    /// under predicates that hold only then (and the compute pass given nothing).
+    template <class Pass>
+    void workDeferredPairs(const Pass& pass, const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) {
+        if (options_.deferred_pairs == 0) return;
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        deferral_args_.use();
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        light_compute_.use();
+        bindParams(0);  // the compute pass takes each pair's list block and flags from its triangle slot
+        glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
+        glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_ARGS * 4));
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // The redraw's predicates: list block b needed and the draws overflowed (the header's binding
+        // is by default the work counters'; the light pass's bindings are made again after).
+        glDisable(GL_STENCIL_TEST);
+        fallback_blocks_.use();
+        glBindVertexArray(empty_vao_.id());
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+        gl::drawListBlockPredicates(fallback_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
+        bindLightPass(masks, lut_table, frame);
+        pass(light_fragment_, fallback_queries_);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    /// The light pass's storage buffers (and the compute pass's: the same bindings).
+    void bindLightPass(const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) const {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, lists_.ids.id());
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        if (lut_table.empty()) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.lut, dummy_.id());
+        } else {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.lut, lut_table);
+        }
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
+        if (options_.skips.silhouettes) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+        if (options_.skips.closed_casters) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.near_samples, near_.id());
+        if (options_.deferred_pairs > 0) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.deferral, deferral_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.pairs, pairs_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
+        }
+        if (!frame.sets.empty()) {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
+        } else {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
+        }
+    }
+
     void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
@@ -471,6 +601,9 @@ private:
                                   static_cast<GLsizeiptr>(std::min<uint64_t>(mask_bytes, masks.size)), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &zero);
         glClearNamedBufferSubData(work_.id(), GL_R32UI, 0, PENUMBRA_SBS_WORK_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        if (options_.deferred_pairs > 0)
+            glClearNamedBufferSubData(deferral_.id(), GL_R32UI, 0, PENUMBRA_SBS_DEFERRAL_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT,
+                                      &zero);
         if (options_.skips.closed_casters)
             glClearNamedBufferSubData(near_.id(), GL_R32UI, 0,
                                       static_cast<GLsizeiptr>((size_t(setup_.sample_count) +
@@ -518,58 +651,50 @@ private:
         const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
         light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, lists_.ids.id());
-        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
-        if (lut_table.empty()) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.lut, dummy_.id());
-        } else {
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.lut, lut_table);
-        }
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
-        if (options_.skips.silhouettes) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
-        if (options_.skips.closed_casters) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.near_samples, near_.id());
-        if (has_sets) {
-            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
-        } else {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
-        }
+        bindLightPass(masks, lut_table, frame);
         const bool complement = stencil && options_.count_work;
-        for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-            glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-            stencilTest(b, GL_LESS);
-            for (uint32_t c = 0; c < 2; ++c) {
-                bindParams(1 + kSlotsPerBlock * b + c);
-                light_pass_.use();
-                draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
-            }
-            if (complement && b < stencil_blocks) {
-                stencilTest(b, GL_GEQUAL);
+        // The first pass: every list block, closed then open casters (and count_work's complement).
+        const auto first_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
+            for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
+                stencilTest(b, GL_LESS);
                 for (uint32_t c = 0; c < 2; ++c) {
-                    bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 1));
-                    light_pass_.use();
+                    bindParams(1 + kSlotsPerBlock * b + c);
+                    program.use();
                     draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
                 }
+                if (complement && b < stencil_blocks) {
+                    stencilTest(b, GL_GEQUAL);
+                    for (uint32_t c = 0; c < 2; ++c) {
+                        bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 1));
+                        program.use();
+                        draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+                    }
+                }
+                glEndConditionalRender();
             }
-            glEndConditionalRender();
-        }
-        if (options_.skips.closed_casters) {
-            // The culled triangles, for the samples the first pass flagged near a kept closed one.
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        };
+        // SoftSkips::closed_casters' second pass: the culled triangles, for the samples the first
+        // pass flagged near a kept closed one.
+        const auto culled_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
             for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-                glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
                 for (GLenum func : {GLenum(GL_LESS), GLenum(GL_GEQUAL)}) {
                     if (func == GL_GEQUAL && !(complement && b < stencil_blocks)) continue;
                     stencilTest(b, func);
                     bindParams(1 + kSlotsPerBlock * b + 2);
-                    light_pass_.use();
+                    program.use();
                     draw_casters(CasterClass::Closed);
                 }
                 glEndConditionalRender();
             }
+        };
+        first_pass(light_pass_, block_queries_);
+        workDeferredPairs(first_pass, masks, lut_table, frame);
+        if (options_.skips.closed_casters) {
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the first pass's near flags
+            culled_pass(light_pass_, block_queries_);
+            workDeferredPairs(culled_pass, masks, lut_table, frame);
         }
         glDisable(GL_STENCIL_TEST);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);

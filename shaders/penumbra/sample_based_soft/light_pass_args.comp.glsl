@@ -1,0 +1,49 @@
+// penumbra — sample-based soft shadows, deferred pairs: after light-pass draws, decides what the
+// compute pass light_pass.comp.glsl works. When the draws appended at most the pairs buffer's
+// capacity (PENUMBRA_SBS_DEFERRAL_CAPACITY pairs) and every fragment's triangle had a slot, it
+// writes glDispatchComputeIndirect's group counts for those pairs and adds the draws' waiting
+// counters to the work counters; otherwise (overflow) it dispatches nothing, drops the waiting
+// counters and sets the fallback flag, on which the pipeline draws the same draws again with the
+// fragment-stage program (its list-block predicates read the flag: blocks.frag.glsl). Then it
+// resets the append counters for the next draws. One invocation.
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_DEFERRAL_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
+#include "penumbra/sample_based_soft/sample_based_soft_shared.h"
+
+#ifndef PENUMBRA_SBS_COUNT_WORK
+#define PENUMBRA_SBS_COUNT_WORK 1
+#endif
+#ifndef PENUMBRA_SBS_DEFERRAL_CAPACITY
+#define PENUMBRA_SBS_DEFERRAL_CAPACITY 0u  // set by the pipeline: SampleBasedSoftGpuOptions::deferred_pairs
+#endif
+
+layout(local_size_x = 1) in;
+
+layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
+#if PENUMBRA_SBS_COUNT_WORK
+layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
+#endif
+
+void main() {
+    const uint pairs = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS];
+    const bool overflow = pairs > uint(PENUMBRA_SBS_DEFERRAL_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
+    const uint dispatched = overflow ? 0u : pairs;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_DISPATCHED] = dispatched;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = (dispatched + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS + 1] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS + 2] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FALLBACK] = overflow ? 1u : 0u;
+    for (uint i = 0u; i < uint(PENUMBRA_SBS_WORK_WORDS); ++i) {
+#if PENUMBRA_SBS_COUNT_WORK
+        if (!overflow) penumbraSbsWork[i] += penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + i];
+#endif
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + i] = 0u;
+    }
+#if PENUMBRA_SBS_COUNT_WORK
+    penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED] += dispatched;
+    if (overflow) penumbraSbsWork[PENUMBRA_SBS_WORK_FALLBACKS] += 1u;
+#endif
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] = 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES] = 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 0u;
+}
