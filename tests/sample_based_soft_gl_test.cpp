@@ -693,9 +693,10 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
     penumbra::test::context();
     // Every skip on (closed casters' second pass included: its pairs are worked after the first
     // pass's), in every mode; capacities large enough for every pair, and small ones: the draws
-    // that overflow them are drawn again by the fragment-stage program.
+    // that overflow them are drawn again by the fragment-stage program; pending exact-test words
+    // past their buffer are tested in the compute pass's own loop.
     struct Capacity {
-        uint32_t pairs, triangles;
+        uint32_t pairs, triangles, tests;
     };
     for (const std::string name : {"columns", "torus_knot"}) {
         const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
@@ -715,6 +716,7 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 options.skips.closed_casters = options.skips.silhouettes = true;
                 options.deferred_pairs = capacity.pairs;
                 options.deferred_triangles = capacity.triangles;
+                options.deferred_tests = capacity.tests;
                 penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
                                                           w.light.view_projection);
                 pipeline.reserve(w.samples());
@@ -726,21 +728,23 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 return pipeline.readMasks();
             };
             penumbra::SampleBasedSoftFrame off;
-            const std::vector<uint32_t> off_masks = run({0, 0}, &off);
+            const std::vector<uint32_t> off_masks = run({0, 0, 0}, &off);
             CHECK(std::count_if(off_masks.begin(), off_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
             CHECK(off.pairs_deferred == 0);
             CHECK(off.deferral_fallbacks == 0);
             const uint64_t worked = off.fragments - off.fragments_skipped;  // fragments past the early returns
-            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18}, Capacity{64, 1u << 18}, Capacity{1u << 20, 16}}) {
+            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18, 1u << 18}, Capacity{1u << 20, 1u << 18, 8},
+                                            Capacity{64, 1u << 18, 0}, Capacity{1u << 20, 16, 0}}) {
                 if (brute && capacity.pairs == 64) break;  // the redraw does not depend on the mode: exact and lut test it
                 CAPTURE(name);
                 CAPTURE(mode_name);
                 CAPTURE(capacity.pairs);
                 CAPTURE(capacity.triangles);
+                CAPTURE(capacity.tests);
                 penumbra::SampleBasedSoftFrame on;
                 const std::vector<uint32_t> on_masks = run(capacity, &on);
-                MESSAGE(name, " ", mode_name, ", capacity ", capacity.pairs, " pairs / ", capacity.triangles,
-                        " triangles: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs, ", exact tests ",
+                MESSAGE(name, " ", mode_name, ", capacity ", capacity.pairs, " pairs / ", capacity.triangles, " triangles / ",
+                        capacity.tests, " test words: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs, ", exact tests ",
                         on.exact_tests, ", recovered ", on.pairs_recovered, "; texel pairs deferred ", on.pairs_deferred,
                         " of ", worked, ", fallbacks ", on.deferral_fallbacks);
                 CHECK(on.passes > 1);

@@ -664,6 +664,12 @@ struct SampleBasedSoftGpuOptions {
     /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
     /// that emits an influence region; 40 bytes each). 0: deferred_pairs / 4 (10 MiB by default).
     uint32_t deferred_triangles = 0;
+    /// Exact tests of deferred pairs: pending mask words (16 bytes each) the compute pass hands to
+    /// an exact-test pass with one invocation per word (light_pass_tests.comp.glsl), instead of
+    /// testing them in the pair's own loop, where a pair's lanes wait for the one with the most
+    /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
+    /// deferred_pairs / 4 (4 MiB by default).
+    uint32_t deferred_tests = 0;
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
     bool timings = false;
@@ -690,6 +696,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.deferred_triangles <= (1u << 24), "penumbra::SampleBasedSoftShadows: deferred_triangles = ",
                    o.deferred_triangles, " must be at most 16777216");
+    PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
+                   " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one

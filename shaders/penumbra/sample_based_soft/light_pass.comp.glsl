@@ -3,16 +3,18 @@
 // fragment stage appended during the draws before it (light_pass.frag.glsl), doing that pair's
 // work (light_pass_work.glsl) with its draw's parameter block (list block and flags from the
 // triangle's slot) and the vertices the geometry stage stored there. Dispatched indirectly with the group counts light_pass_args.comp.glsl
-// wrote; reads min(appended, capacity) pairs (PENUMBRA_SBS_DEFERRAL_DISPATCHED).
+// wrote; reads the pairs light_pass_args.comp.glsl let through (PENUMBRA_SBS_DEFERRAL_DISPATCHED).
+// The exact tests of its pairs' pending words go to the exact-test pass (light_pass_tests.comp.glsl)
+// as far as its buffer holds them, else they run here.
 // Defines: light_pass_work.glsl's.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
 // penumbra-permutation: PENUMBRA_SBS_MODE=1 PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
+#define PENUMBRA_SBS_DEFER_TESTS 1  // pending exact tests go to light_pass_tests.comp.glsl
 #include "penumbra/sample_based_soft/light_pass_work.glsl"
 
 layout(local_size_x = PENUMBRA_SBS_DEFERRAL_GROUP) in;
 
-layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) readonly buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) readonly buffer PenumbraSbsPairs { uvec2 penumbraSbsPairs[]; };
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
 
@@ -29,6 +31,7 @@ void main() {
     // The draw's parameter block: every slot shares all but the list block and the flags.
     PenumbraSbsParams P = penumbraSbsParams;
     const uint draw = penumbraSbsTriangles[base + 9u];
+    penumbraSbsTestTriangle = pair.x;
     P.grid.w = draw & 0xFFFFu;
     P.reserved.y = draw >> 16u;
     penumbraSbsTexelWork(P, texel, penumbraSampleListsBlock(ivec2(texel), P.grid.w, P.grid.z), dvec3(penumbraSbsStoredVertex(base)),

@@ -5,9 +5,11 @@
 // counters to the work counters; otherwise (overflow) it dispatches nothing, drops the waiting
 // counters and sets the fallback flag, on which the pipeline draws the same draws again with the
 // fragment-stage program (its list-block predicates read the flag: blocks.frag.glsl). Then it
-// resets the append counters for the next draws. One invocation.
+// resets the append counters for the next draws. One invocation. With PENUMBRA_SBS_ARGS_TESTS=1,
+// after the compute pass, the same for the exact-test pass (light_pass_tests.comp.glsl).
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_DEFERRAL_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
+// penumbra-permutation: PENUMBRA_SBS_ARGS_TESTS=1 PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY=1024u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
@@ -24,7 +26,23 @@ layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferr
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
 #endif
 
+#ifndef PENUMBRA_SBS_ARGS_TESTS
+#define PENUMBRA_SBS_ARGS_TESTS 0  // 1: after the compute pass, the exact-test pass's group counts
+#endif
+#ifndef PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY
+#define PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY 0u  // set by the pipeline: SampleBasedSoftGpuOptions::deferred_tests
+#endif
+
 void main() {
+#if PENUMBRA_SBS_ARGS_TESTS
+    // The words the compute pass appended, up to the capacity (requests past it wrote no bits).
+    const uint words = min(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS], uint(PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY));
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED] = words;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS] = (words + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS + 1] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS + 2] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS] = 0u;
+#else
     const uint pairs = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS];
     const bool overflow = pairs > uint(PENUMBRA_SBS_DEFERRAL_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
     const uint dispatched = overflow ? 0u : pairs;
@@ -46,4 +64,5 @@ void main() {
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 0u;
+#endif
 }

@@ -41,6 +41,9 @@
 #ifndef PENUMBRA_SBS_CLOSED_CASTERS
 #define PENUMBRA_SBS_CLOSED_CASTERS 0  // 1: SoftSkips::closed_casters (the near buffer is bound)
 #endif
+#ifndef PENUMBRA_SBS_DEFER_TESTS
+#define PENUMBRA_SBS_DEFER_TESTS 0  // 1: the compute pass of deferred pairs (light_pass.comp.glsl) defers its exact tests
+#endif
 
 layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
     PenumbraSbsParams penumbraSbsParams;
@@ -61,6 +64,12 @@ layout(std430, binding = PENUMBRA_SBS_NEAR_BINDING) buffer PenumbraSbsNear { uin
 #endif
 #if PENUMBRA_SBS_COUNT_WORK
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
+#endif
+#if PENUMBRA_SBS_DEFER_TESTS
+layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
+// (list slot, triangle slot, mask word, its bits): one pending word per entry.
+layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSbsTests { uvec4 penumbraSbsTests[]; };
+uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (light_pass.comp.glsl sets it)
 #endif
 
 #define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraSbsCounts[list]
@@ -121,6 +130,16 @@ PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip
     return result;
 }
 
+// A view sample's light-sample set and rotation step from its selection word (set 0, unrotated when
+// no per-sample buffer is bound; out of range: set 0 / unrotated, which the CPU twin rejects).
+uvec2 penumbraSbsSelection(const PenumbraSbsParams P, uint id) {
+    const uint word = P.counts.w != 0u ? penumbraSbsSets[id] : 0u;
+    uint set = word & 0xFFu, turn_step = word >> 8;
+    if (set >= P.config.z) set = 0u;
+    if (turn_step >= P.reserved.x) turn_step = 0u;
+    return uvec2(set, turn_step);
+}
+
 // The light samples of mask word w (of n): bits 32 w .. min(32 w + 31, n - 1).
 uint penumbraSbsWordBits(uint w, uint n) { return 32u * w + 32u <= n ? 0xFFFFFFFFu : (1u << (n - 32u * w)) - 1u; }
 
@@ -177,10 +196,8 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const uint id = penumbraSampleListsId(slot);
-        const uint word = P.counts.w != 0u ? penumbraSbsSets[id] : 0u;
-        uint set = word & 0xFFu, turn_step = word >> 8;
-        if (set >= P.config.z) set = 0u;    // out of range: set 0 (the CPU twin rejects it)
-        if (turn_step >= P.reserved.x) turn_step = 0u;  // ... unrotated
+        const uvec2 selection = penumbraSbsSelection(P, id);
+        const uint set = selection.x, turn_step = selection.y;
         const uint mask_base = id * words, sample_base = (set * P.reserved.x + turn_step) * n;
 #if PENUMBRA_SBS_CLOSED_CASTERS
         if (culled_pass) {
@@ -327,6 +344,28 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 pending |= uint(uncertain.x != 0u) << (4u * block) | uint(uncertain.y != 0u) << (4u * block + 1u) |
                            uint(uncertain.z != 0u) << (4u * block + 2u) | uint(uncertain.w != 0u) << (4u * block + 3u);
 #endif
+            }
+        }
+#endif
+#if PENUMBRA_SBS_DEFER_TESTS && PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_LUT_ID
+        // The compute pass of deferred pairs hands its pending words to the exact-test pass
+        // (light_pass_tests.comp.glsl: one invocation per word, densely packed) when they fit its
+        // buffer; else they stay pending for the loop below. A hard texel's one test stays here.
+        if (pending != 0u && !hard_texel) {
+            const uint count = uint(bitCount(pending));
+            const uint first = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS], count);
+            const uint capacity = uint(penumbraSbsTests.length());
+            if (first + count <= capacity) {
+                for (uint k = first; pending != 0u; ++k) {
+                    const uint w = uint(findLSB(pending));
+                    pending &= pending - 1u;
+                    const uint bits = all_exact ? penumbraSbsWordBits(w, n) : undecided[w >> 2u][w & 3u];
+                    tests += uint(bitCount(bits));
+                    penumbraSbsTests[k] = uvec4(slot, penumbraSbsTestTriangle, w, bits);
+                }
+            } else {
+                // Past the capacity: the entries below it that this request took get no bits.
+                for (uint k = first; k < capacity; ++k) penumbraSbsTests[k] = uvec4(0u);
             }
         }
 #endif

@@ -61,6 +61,9 @@
 #ifndef PENUMBRA_SBS_PAIRS_BINDING
 #define PENUMBRA_SBS_PAIRS_BINDING 12     // uvec2[deferred_pairs]: (triangle slot, texel x | y << 16)
 #endif
+#ifndef PENUMBRA_SBS_TESTS_BINDING
+#define PENUMBRA_SBS_TESTS_BINDING 14     // uvec4[deferred_tests]: (list slot, triangle slot, word, bits)
+#endif
 #ifndef PENUMBRA_SBS_TRIANGLES_BINDING
 #define PENUMBRA_SBS_TRIANGLES_BINDING 13  // uint[PENUMBRA_SBS_TRIANGLE_WORDS * deferred_triangles]: per slot
 #endif
@@ -125,7 +128,10 @@
 #define PENUMBRA_SBS_DEFERRAL_ARGS 4         // 3 words: glDispatchComputeIndirect's group counts
 #define PENUMBRA_SBS_DEFERRAL_FALLBACK 7     // the last draws overflowed: the fragment stage redraws them
 #define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws
-#define PENUMBRA_SBS_DEFERRAL_WORDS 24
+#define PENUMBRA_SBS_DEFERRAL_TESTS 24       // exact-test words appended by the compute pass (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 25  // words the exact-test pass reads
+#define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 28   // 3 words: the exact-test pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_WORDS 32
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
 #define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16
