@@ -658,7 +658,7 @@ struct SampleBasedSoftGpuOptions {
     /// fragments run in 2 x 2 quads and rasteriser tiles, partly idle at the influence regions'
     /// edges; llvmpipe runs a fragment shader's every instruction for its masked-off lanes too;
     /// and some GPUs shade fragments far slower than they run compute (an H200's fragment
-    /// arithmetic measured ~30x slower). On llvmpipe the soft pass ran 2.2-2.7x faster with every
+    /// arithmetic measured ~30x slower). On llvmpipe the soft pass ran 2.3-2.7x faster with every
     /// skip on (BM_SoftSkips: all_fragment against all).
     uint32_t deferred_pairs = 1u << 20;
     /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
@@ -670,6 +670,12 @@ struct SampleBasedSoftGpuOptions {
     /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
     /// deferred_pairs / 4 (4 MiB by default).
     uint32_t deferred_tests = 0;
+    /// Samples of deferred pairs that need the LUT's tables (16 bytes each): the pairs' compute pass
+    /// hands them to a tables pass with one invocation per sample (light_pass_tables.comp.glsl), as
+    /// most pairs end before the tables (the whole light in front of a plane) and their lanes
+    /// would wait on the rest; past the capacity they run in the pair's pass (same bits). 0:
+    /// deferred_pairs / 2 (8 MiB by default).
+    uint32_t deferred_samples = 0;
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
     bool timings = false;
@@ -698,6 +704,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    o.deferred_triangles, " must be at most 16777216");
     PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
+    PENUMBRA_CHECK(o.deferred_samples <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_samples = ",
+                   o.deferred_samples, " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one

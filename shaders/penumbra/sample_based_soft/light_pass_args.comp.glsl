@@ -5,11 +5,14 @@
 // counters to the work counters; otherwise (overflow) it dispatches nothing, drops the waiting
 // counters and sets the fallback flag, on which the pipeline draws the same draws again with the
 // fragment-stage program (its list-block predicates read the flag: blocks.frag.glsl). Then it
-// resets the append counters for the next draws. One invocation. With PENUMBRA_SBS_ARGS_TESTS=1,
-// after the compute pass, the same for the exact-test pass (light_pass_tests.comp.glsl).
+// resets the append counters for the next draws. One invocation. PENUMBRA_SBS_ARGS_KIND=1 and 2:
+// the same for the exact-test pass (light_pass_tests.comp.glsl) and the tables pass
+// (light_pass_tables.comp.glsl), after the passes that fill their buffers: the entries appended, up
+// to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work).
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_DEFERRAL_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
-// penumbra-permutation: PENUMBRA_SBS_ARGS_TESTS=1 PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
@@ -26,22 +29,30 @@ layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferr
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
 #endif
 
-#ifndef PENUMBRA_SBS_ARGS_TESTS
-#define PENUMBRA_SBS_ARGS_TESTS 0  // 1: after the compute pass, the exact-test pass's group counts
+#ifndef PENUMBRA_SBS_ARGS_KIND
+#define PENUMBRA_SBS_ARGS_KIND 0  // 0: the pairs' compute pass, 1: the exact-test pass, 2: the tables pass
 #endif
-#ifndef PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY
-#define PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY 0u  // set by the pipeline: SampleBasedSoftGpuOptions::deferred_tests
+#ifndef PENUMBRA_SBS_ARGS_CAPACITY
+#define PENUMBRA_SBS_ARGS_CAPACITY 0u  // kinds 1, 2: SampleBasedSoftGpuOptions::deferred_tests, deferred_samples
+#endif
+#if PENUMBRA_SBS_ARGS_KIND == 1
+#define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_TESTS
+#define PENUMBRA_SBS_ARGS_DISPATCHED PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED
+#define PENUMBRA_SBS_ARGS_WORDS PENUMBRA_SBS_DEFERRAL_TEST_ARGS
+#elif PENUMBRA_SBS_ARGS_KIND == 2
+#define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_SAMPLES
+#define PENUMBRA_SBS_ARGS_DISPATCHED PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED
+#define PENUMBRA_SBS_ARGS_WORDS PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS
 #endif
 
 void main() {
-#if PENUMBRA_SBS_ARGS_TESTS
-    // The words the compute pass appended, up to the capacity (requests past it wrote no bits).
-    const uint words = min(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS], uint(PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY));
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED] = words;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS] = (words + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS + 1] = 1u;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS + 2] = 1u;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TESTS] = 0u;
+#if PENUMBRA_SBS_ARGS_KIND != 0
+    const uint entries = min(penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER], uint(PENUMBRA_SBS_ARGS_CAPACITY));
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_DISPATCHED] = entries;
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS] = (entries + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS + 1] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS + 2] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER] = 0u;
 #else
     const uint pairs = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS];
     const bool overflow = pairs > uint(PENUMBRA_SBS_DEFERRAL_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;

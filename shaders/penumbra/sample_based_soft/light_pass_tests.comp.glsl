@@ -5,7 +5,7 @@
 // light_pass_work.glsl's exact-test site runs, on the same inputs: the same bits), then one
 // atomicOr into the sample's mask word. Densely packed: a word's tests no longer wait on the
 // longest pending list of its neighbours' pairs. Dispatched indirectly (light_pass_args.comp.glsl
-// with PENUMBRA_SBS_ARGS_TESTS=1); entries with no bits (a request past the buffer) are skipped.
+// with PENUMBRA_SBS_ARGS_KIND=1); entries with no bits (a request past the buffer) are skipped.
 // Defines: light_pass_work.glsl's.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
 // penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
@@ -15,11 +15,7 @@ layout(local_size_x = PENUMBRA_SBS_DEFERRAL_GROUP) in;
 
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) readonly buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) readonly buffer PenumbraSbsTests { uvec4 penumbraSbsTests[]; };
-layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
-
-dvec3 penumbraSbsStoredVertex(uint base) {
-    return dvec3(uintBitsToFloat(uvec3(penumbraSbsTriangles[base], penumbraSbsTriangles[base + 1u], penumbraSbsTriangles[base + 2u])));
-}
+#include "penumbra/sample_based_soft/triangle_slots.glsl"
 
 void main() {
     const uint k = gl_GlobalInvocationID.x;
@@ -33,8 +29,7 @@ void main() {
     const uint id = penumbraSampleListsId(slot);
     const uvec2 selection = penumbraSbsSelection(P, id);
     const uint sample_base = (selection.x * P.reserved.x + selection.y) * n + 32u * w;
-    const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * entry.y;
-    const dvec3 v0 = penumbraSbsStoredVertex(base), v1 = penumbraSbsStoredVertex(base + 3u), v2 = penumbraSbsStoredVertex(base + 6u);
+    const dvec3 v0 = penumbraSbsSlotVertex(entry.y, 0u), v1 = penumbraSbsSlotVertex(entry.y, 1u), v2 = penumbraSbsSlotVertex(entry.y, 2u);
     uint m = 0u;
     while (bits != 0u) {
         const uint bit = uint(findLSB(bits));

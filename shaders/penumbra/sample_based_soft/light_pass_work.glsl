@@ -26,6 +26,8 @@
 // Cost model: SIMD drivers run every branch some lane of a group takes; llvmpipe (Mesa 22) runs
 // every `if` under a lane mask without branching and every loop body at least once per group, so
 // each pair has one exact-test site (the pending words below), not one per table and word.
+#ifndef PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL
+#define PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL
 #include "penumbra/sample_lists/sample_lists_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
@@ -41,9 +43,13 @@
 #ifndef PENUMBRA_SBS_CLOSED_CASTERS
 #define PENUMBRA_SBS_CLOSED_CASTERS 0  // 1: SoftSkips::closed_casters (the near buffer is bound)
 #endif
-#ifndef PENUMBRA_SBS_DEFER_TESTS
-#define PENUMBRA_SBS_DEFER_TESTS 0  // 1: the compute pass of deferred pairs (light_pass.comp.glsl) defers its exact tests
+#ifndef PENUMBRA_SBS_STAGE
+// 0: the whole pair (the fragment-stage program); deferred pairs: 1 the pairs' compute pass
+// (light_pass.comp.glsl), which hands each sample that needs the LUT's tables to 2, the tables pass
+// (light_pass_tables.comp.glsl); both hand their pending exact-test words to the exact-test pass.
+#define PENUMBRA_SBS_STAGE 0
 #endif
+#define PENUMBRA_SBS_DEFER_TESTS (PENUMBRA_SBS_STAGE != 0)
 
 layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
     PenumbraSbsParams penumbraSbsParams;
@@ -69,7 +75,11 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 // (list slot, triangle slot, mask word, its bits): one pending word per entry.
 layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSbsTests { uvec4 penumbraSbsTests[]; };
-uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (light_pass.comp.glsl sets it)
+uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (the compute passes set it)
+#endif
+#if PENUMBRA_SBS_STAGE == 1
+// (list slot, triangle slot, texel x | y << 16, 0): one sample of a pair that needs the tables.
+layout(std430, binding = PENUMBRA_SBS_SAMPLES_WORK_BINDING) writeonly buffer PenumbraSbsTableWork { uvec4 penumbraSbsTableWork[]; };
 #endif
 
 #define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraSbsCounts[list]
@@ -315,6 +325,15 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 ++front;
                 continue;
             }
+#if PENUMBRA_SBS_STAGE == 1
+            // The tables in their own pass, densely packed: here a group of lanes would run them as
+            // long as one of its pairs needs them (most end above). Past its buffer: here.
+            const uint entry = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SAMPLES], 1u);
+            if (entry < uint(penumbraSbsTableWork.length())) {
+                penumbraSbsTableWork[entry] = uvec4(slot, penumbraSbsTestTriangle, texel.x | texel.y << 16u, 0u);
+                continue;
+            }
+#endif
             for (uint block = 0u; block < tables; ++block) {
                 const uint table = set * tables + block;
 #if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_LUT_ID
@@ -402,7 +421,13 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
 #endif
     }
 #if PENUMBRA_SBS_COUNT_WORK
+#if PENUMBRA_SBS_STAGE == 2
+    // The tables pass counts what it adds: uncertain bits, unproven planes, exact tests. The pair's
+    // compute pass counted the fragment and the pair (it ran the same steps up to the tables).
+    pairs = ignored = unproven_pairs = cut = hard = recovered = front = 0u;
+#else
     atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
+#endif
     if (pairs != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS], pairs);
     if (ignored != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_IGNORED], ignored);
     if (unproven_pairs != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_UNPROVEN], unproven_pairs);
@@ -415,3 +440,4 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     if (front != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_FRONT], front);
 #endif
 }
+#endif

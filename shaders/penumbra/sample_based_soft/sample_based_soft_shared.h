@@ -64,6 +64,9 @@
 #ifndef PENUMBRA_SBS_TESTS_BINDING
 #define PENUMBRA_SBS_TESTS_BINDING 14     // uvec4[deferred_tests]: (list slot, triangle slot, word, bits)
 #endif
+#ifndef PENUMBRA_SBS_SAMPLES_WORK_BINDING
+#define PENUMBRA_SBS_SAMPLES_WORK_BINDING 15  // uvec4[deferred_samples]: (list slot, triangle slot, texel, 0)
+#endif
 #ifndef PENUMBRA_SBS_TRIANGLES_BINDING
 #define PENUMBRA_SBS_TRIANGLES_BINDING 13  // uint[PENUMBRA_SBS_TRIANGLE_WORDS * deferred_triangles]: per slot
 #endif
@@ -130,8 +133,11 @@
 #define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws
 #define PENUMBRA_SBS_DEFERRAL_TESTS 24       // exact-test words appended by the compute pass (may exceed the capacity)
 #define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 25  // words the exact-test pass reads
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES 26     // samples handed to the tables pass (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 27  // samples the tables pass reads
 #define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 28   // 3 words: the exact-test pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 32
+#define PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS 32  // 3 words: the tables pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_WORDS 36
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
 #define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16

@@ -62,8 +62,9 @@
 //             fragment walks its texel's list block (light_pass_work.glsl) or, with deferred_pairs,
 //             appends (triangle slot, texel) for (3b) the compute pass: a one-invocation dispatch
 //             turns the count into group counts, glDispatchComputeIndirect works every appended pair
-//             (light_pass.comp.glsl) and, the same way, the exact-test pass its pending words
-//             (light_pass_tests.comp.glsl); when the draws overflowed the pairs buffer or the triangle
+//             (light_pass.comp.glsl), the same way the tables pass its samples that need the LUT's
+//             tables (light_pass_tables.comp.glsl) and the exact-test pass the pending words of
+//             both (light_pass_tests.comp.glsl); when the draws overflowed the pairs buffer or the triangle
 //             slots, nothing is dispatched and a second set of list-block predicates (one point
 //             per block, true only then) draws the same blocks again with the fragment-stage
 //             program; with skips.closed_casters then once more per block with Closed (the culled
@@ -123,6 +124,7 @@ struct SbsBindings {
     uint32_t pairs = PENUMBRA_SBS_PAIRS_BINDING;          ///< deferred pairs: (triangle slot, texel)
     uint32_t triangles = PENUMBRA_SBS_TRIANGLES_BINDING;  ///< deferred pairs: triangle slots
     uint32_t tests = PENUMBRA_SBS_TESTS_BINDING;          ///< deferred pairs: pending exact-test words
+    uint32_t table_samples = PENUMBRA_SBS_SAMPLES_WORK_BINDING;  ///< deferred pairs: samples for the tables pass
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -219,7 +221,8 @@ public:
             {"PENUMBRA_SBS_VISIBILITY_BINDING", b.visibility}, {"PENUMBRA_SBS_RESOLVE_OFFSETS_BINDING", b.resolve_offsets},
             {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples},
             {"PENUMBRA_SBS_DEFERRAL_BINDING", b.deferral},   {"PENUMBRA_SBS_PAIRS_BINDING", b.pairs},
-            {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}, {"PENUMBRA_SBS_TESTS_BINDING", b.tests}};
+            {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}, {"PENUMBRA_SBS_TESTS_BINDING", b.tests},
+            {"PENUMBRA_SBS_SAMPLES_WORK_BINDING", b.table_samples}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
         ShaderDefines light_defines = defines;
@@ -234,34 +237,45 @@ public:
             // program without deferral redraws the draws that overflow, under predicates of its own.
             const GLint compute_blocks = gl::getInteger(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS);
             const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
-            PENUMBRA_CHECK(geometry_blocks >= (options_.count_work ? 3 : 2) && compute_blocks >= needed + 4,
+            PENUMBRA_CHECK(geometry_blocks >= (options_.count_work ? 3 : 2) && compute_blocks >= needed + 5,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs needs ", options_.count_work ? 3 : 2,
-                           " geometry and ", needed + 4, " compute storage blocks; the driver has ", geometry_blocks, " and ",
+                           " geometry and ", needed + 5, " compute storage blocks; the driver has ", geometry_blocks, " and ",
                            compute_blocks, "; set deferred_pairs = 0");
             const uint32_t triangles = options_.deferred_triangles ? options_.deferred_triangles
                                                                    : std::max<uint32_t>(1, options_.deferred_pairs / 4);
             const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
             const uint32_t test_words = options_.deferred_tests ? options_.deferred_tests
                                                                 : std::max<uint32_t>(1, options_.deferred_pairs / 4);
+            const uint32_t table_samples = options_.deferred_samples ? options_.deferred_samples
+                                                                     : std::max<uint32_t>(1, options_.deferred_pairs / 2);
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
+            const uint64_t sample_bytes = uint64_t(table_samples) * 16;
             const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS;
-            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block,
+            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
+                               sample_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
-                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes) and ", test_words,
-                           " exact-test words (", test_bytes, " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ",
-                           max_block);
+                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes), ", test_words,
+                           " exact-test words (", test_bytes, " bytes) and ", table_samples, " table samples (", sample_bytes,
+                           " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
             ShaderDefines args_defines = defines;
             args_defines.push_back({"PENUMBRA_SBS_DEFERRAL_CAPACITY", std::to_string(options_.deferred_pairs) + "u"});
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
             deferral_args_ =
                 gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", args_defines, library);
             ShaderDefines test_args_defines = defines;
-            test_args_defines.push_back({"PENUMBRA_SBS_ARGS_TESTS", "1"});
-            test_args_defines.push_back({"PENUMBRA_SBS_DEFERRAL_TEST_CAPACITY", std::to_string(test_words) + "u"});
+            test_args_defines.push_back({"PENUMBRA_SBS_ARGS_KIND", "1"});
+            test_args_defines.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(test_words) + "u"});
             test_args_ =
                 gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", test_args_defines, library);
             light_tests_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tests.comp.glsl", defines, library);
             tests_ = gl::Buffer(test_bytes);
+            ShaderDefines table_args_defines = defines;
+            table_args_defines.push_back({"PENUMBRA_SBS_ARGS_KIND", "2"});
+            table_args_defines.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(table_samples) + "u"});
+            table_args_ =
+                gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", table_args_defines, library);
+            light_tables_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tables.comp.glsl", defines, library);
+            table_samples_ = gl::Buffer(sample_bytes);
             ShaderDefines fragment_defines = defines;
             fragment_defines.push_back({"PENUMBRA_SBS_DEFERRED", "0"});
             light_fragment_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
@@ -464,8 +478,9 @@ private:
     gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
-    gl::Program light_compute_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_;
-    gl::Buffer deferral_, pairs_, triangles_, tests_;
+    gl::Program light_compute_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_, table_args_,
+        light_tables_;
+    gl::Buffer deferral_, pairs_, triangles_, tests_, table_samples_;
     std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
@@ -550,7 +565,13 @@ private:
         bindParams(0);  // the compute pass takes each pair's list block and flags from its triangle slot
         glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
         glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_ARGS * 4));
-        // The exact tests the compute pass handed on, one invocation per pending word.
+        // The samples it handed to the tables pass, then every exact test handed on by either.
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        table_args_.use();
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        light_tables_.use();
+        glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS * 4));
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         test_args_.use();
         glDispatchCompute(1, 1, 1);
@@ -591,6 +612,7 @@ private:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.pairs, pairs_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.tests, tests_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_samples, table_samples_.id());
         }
         if (!frame.sets.empty()) {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);

@@ -1,0 +1,23 @@
+// penumbra — sample-based soft shadows, deferred pairs: the triangle slots the light pass's
+// geometry stage wrote (light_pass.geom.glsl), read by the compute passes: a slot holds the
+// triangle's three float vertices as bits and its draw's list block and flags, the only fields in
+// which the draws' parameter blocks differ.
+#ifndef PENUMBRA_SBS_TRIANGLE_SLOTS_GLSL
+#define PENUMBRA_SBS_TRIANGLE_SLOTS_GLSL
+layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
+
+/// Vertex `i` (0..2) of slot `slot`, in fp64 (exactly the float the fragment stage would widen).
+dvec3 penumbraSbsSlotVertex(uint slot, uint i) {
+    const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * slot + 3u * i;
+    return dvec3(uintBitsToFloat(uvec3(penumbraSbsTriangles[base], penumbraSbsTriangles[base + 1u], penumbraSbsTriangles[base + 2u])));
+}
+
+/// The parameter block of the draw that wrote slot `slot`.
+PenumbraSbsParams penumbraSbsSlotParams(uint slot) {
+    PenumbraSbsParams P = penumbraSbsParams;
+    const uint draw = penumbraSbsTriangles[PENUMBRA_SBS_TRIANGLE_WORDS * slot + 9u];
+    P.grid.w = draw & 0xFFFFu;
+    P.reserved.y = draw >> 16u;
+    return P;
+}
+#endif
