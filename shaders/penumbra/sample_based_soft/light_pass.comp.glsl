@@ -2,8 +2,9 @@
 // (SampleBasedSoftGpuOptions::deferred_pairs): one invocation per (triangle slot, texel) pair the
 // fragment stage appended during the draws before it (light_pass.frag.glsl), doing that pair's
 // work (light_pass_work.glsl) with its draw's parameter block (list block and flags from the
-// triangle's slot) and the vertices the geometry stage stored there. Dispatched indirectly with the group counts light_pass_args.comp.glsl
-// wrote; reads the pairs light_pass_args.comp.glsl let through (PENUMBRA_SBS_DEFERRAL_DISPATCHED).
+// triangle's slot) and the vertices the geometry stage stored there (triangle_slots.glsl).
+// Dispatched indirectly with the group counts light_pass_args.comp.glsl wrote; reads the pairs it
+// let through (PENUMBRA_SBS_DEFERRAL_DISPATCHED).
 // Samples that need the LUT's tables go to the tables pass (light_pass_tables.comp.glsl), the
 // pending exact-test words to the exact-test pass (light_pass_tests.comp.glsl), each as far as its
 // buffer holds them, else they run here.
