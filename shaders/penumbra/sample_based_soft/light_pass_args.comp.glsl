@@ -1,6 +1,6 @@
 // penumbra — sample-based soft shadows, deferred pairs: after light-pass draws, decides what the
 // compute pass light_pass.comp.glsl works. When the draws appended at most the pairs buffer's
-// capacity (PENUMBRA_SBS_DEFERRAL_CAPACITY pairs) and every fragment's triangle had a slot, it
+// capacity (PENUMBRA_SBS_ARGS_CAPACITY pairs) and every fragment's triangle had a slot, it
 // writes glDispatchComputeIndirect's group counts for those pairs and adds the draws' waiting
 // counters to the work counters; otherwise (overflow) it dispatches nothing, drops the waiting
 // counters and sets the fallback flag, on which the pipeline draws the same draws again with the
@@ -9,7 +9,7 @@
 // the same for the exact-test pass (light_pass_tests.comp.glsl) and the tables pass
 // (light_pass_tables.comp.glsl), after the passes that fill their buffers: the entries appended, up
 // to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work).
-// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_DEFERRAL_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
@@ -17,9 +17,6 @@
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
 #define PENUMBRA_SBS_COUNT_WORK 1
-#endif
-#ifndef PENUMBRA_SBS_DEFERRAL_CAPACITY
-#define PENUMBRA_SBS_DEFERRAL_CAPACITY 0u  // set by the pipeline: SampleBasedSoftGpuOptions::deferred_pairs
 #endif
 
 layout(local_size_x = 1) in;
@@ -33,7 +30,7 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #define PENUMBRA_SBS_ARGS_KIND 0  // 0: the pairs' compute pass, 1: the exact-test pass, 2: the tables pass
 #endif
 #ifndef PENUMBRA_SBS_ARGS_CAPACITY
-#define PENUMBRA_SBS_ARGS_CAPACITY 0u  // kinds 1, 2: SampleBasedSoftGpuOptions::deferred_tests, deferred_samples
+#define PENUMBRA_SBS_ARGS_CAPACITY 0u  // SampleBasedSoftGpuOptions::deferred_pairs, deferred_tests, deferred_samples
 #endif
 #if PENUMBRA_SBS_ARGS_KIND == 1
 #define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_TESTS
@@ -55,7 +52,7 @@ void main() {
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER] = 0u;
 #else
     const uint pairs = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS];
-    const bool overflow = pairs > uint(PENUMBRA_SBS_DEFERRAL_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
+    const bool overflow = pairs > uint(PENUMBRA_SBS_ARGS_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
     const uint dispatched = overflow ? 0u : pairs;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_DISPATCHED] = dispatched;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = (dispatched + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);

@@ -225,12 +225,14 @@ public:
             {"PENUMBRA_SBS_SAMPLES_WORK_BINDING", b.table_samples}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
-        ShaderDefines light_defines = defines;
-        light_defines.push_back({"PENUMBRA_SBS_DEFERRED", deferred ? "1" : "0"});
-        light_pass_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
-                                        "penumbra/sample_based_soft/light_pass.geom.glsl",
-                                        "penumbra/sample_based_soft/light_pass.frag.glsl"},
-                                       light_defines, library);
+        const auto light_pass_program = [&](bool deferring) {
+            ShaderDefines d = defines;
+            d.push_back({"PENUMBRA_SBS_DEFERRED", deferring ? "1" : "0"});
+            return gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl", "penumbra/sample_based_soft/light_pass.geom.glsl",
+                                     "penumbra/sample_based_soft/light_pass.frag.glsl"},
+                                    d, library);
+        };
+        light_pass_ = light_pass_program(deferred);
         if (deferred) {
             // Deferred pairs: the geometry stage stores triangles (two more storage blocks), the
             // fragment stage appends pairs, a compute pass works them (checked here, throws); the
@@ -257,31 +259,22 @@ public:
                            " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes), ", test_words,
                            " exact-test words (", test_bytes, " bytes) and ", table_samples, " table samples (", sample_bytes,
                            " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
-            ShaderDefines args_defines = defines;
-            args_defines.push_back({"PENUMBRA_SBS_DEFERRAL_CAPACITY", std::to_string(options_.deferred_pairs) + "u"});
+            // The group counts of each compute pass (PENUMBRA_SBS_ARGS_KIND: 0 pairs, 1 exact tests, 2 tables).
+            const auto args_program = [&](uint32_t kind, uint32_t capacity) {
+                ShaderDefines d = defines;
+                d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
+                d.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(capacity) + "u"});
+                return gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", d, library);
+            };
+            deferral_args_ = args_program(0, options_.deferred_pairs);
+            test_args_ = args_program(1, test_words);
+            table_args_ = args_program(2, table_samples);
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
-            deferral_args_ =
-                gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", args_defines, library);
-            ShaderDefines test_args_defines = defines;
-            test_args_defines.push_back({"PENUMBRA_SBS_ARGS_KIND", "1"});
-            test_args_defines.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(test_words) + "u"});
-            test_args_ =
-                gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", test_args_defines, library);
             light_tests_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tests.comp.glsl", defines, library);
-            tests_ = gl::Buffer(test_bytes);
-            ShaderDefines table_args_defines = defines;
-            table_args_defines.push_back({"PENUMBRA_SBS_ARGS_KIND", "2"});
-            table_args_defines.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(table_samples) + "u"});
-            table_args_ =
-                gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", table_args_defines, library);
             light_tables_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tables.comp.glsl", defines, library);
+            tests_ = gl::Buffer(test_bytes);
             table_samples_ = gl::Buffer(sample_bytes);
-            ShaderDefines fragment_defines = defines;
-            fragment_defines.push_back({"PENUMBRA_SBS_DEFERRED", "0"});
-            light_fragment_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
-                                                "penumbra/sample_based_soft/light_pass.geom.glsl",
-                                                "penumbra/sample_based_soft/light_pass.frag.glsl"},
-                                               fragment_defines, library);
+            light_fragment_ = light_pass_program(false);
             ShaderDefines fallback_defines = defines;
             fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
             fallback_blocks_ = gl::buildProgram(
