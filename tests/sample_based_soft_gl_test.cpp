@@ -696,7 +696,7 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
     // that overflow them are drawn again by the fragment-stage program; pending exact-test words
     // past their buffer are tested in the compute pass's own loop.
     struct Capacity {
-        uint32_t pairs, triangles, tests, samples;
+        uint32_t pairs, triangles, tests;
     };
     for (const std::string name : {"columns", "torus_knot"}) {
         const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
@@ -717,7 +717,6 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 options.deferred_pairs = capacity.pairs;
                 options.deferred_triangles = capacity.triangles;
                 options.deferred_tests = capacity.tests;
-                options.deferred_samples = capacity.samples;
                 penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
                                                           w.light.view_projection);
                 pipeline.reserve(w.samples());
@@ -729,36 +728,41 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 return pipeline.readMasks();
             };
             penumbra::SampleBasedSoftFrame off;
-            const std::vector<uint32_t> off_masks = run({0, 0, 0, 0}, &off);
+            const std::vector<uint32_t> off_masks = run({0, 0, 0}, &off);
             CHECK(std::count_if(off_masks.begin(), off_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
             CHECK(off.pairs_deferred == 0);
             CHECK(off.deferral_fallbacks == 0);
             const uint64_t worked = off.fragments - off.fragments_skipped;  // fragments past the early returns
-            // Every buffer large enough; the exact-test words' and the table samples' small (the rest
-            // run in the passes that hand them on); the pairs' and the triangle slots' small (redrawn).
-            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18, 1u << 18, 1u << 18}, Capacity{1u << 20, 1u << 18, 8, 64},
-                                            Capacity{64, 1u << 18, 0, 0}, Capacity{1u << 20, 16, 0, 0}}) {
+            // Every buffer large enough; the exact-test words' small (the rest run in the passes that
+            // hand them on); the pairs' and the triangle slots' small (redrawn).
+            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18, 1u << 18}, Capacity{1u << 20, 1u << 18, 8},
+                                            Capacity{64, 1u << 18, 0}, Capacity{1u << 20, 16, 0}}) {
                 if (brute && capacity.pairs == 64) break;  // the redraw does not depend on the mode: exact and lut test it
                 CAPTURE(name);
                 CAPTURE(mode_name);
                 CAPTURE(capacity.pairs);
                 CAPTURE(capacity.triangles);
                 CAPTURE(capacity.tests);
-                CAPTURE(capacity.samples);
                 penumbra::SampleBasedSoftFrame on;
                 const std::vector<uint32_t> on_masks = run(capacity, &on);
                 MESSAGE(name, " ", mode_name, ", capacity ", capacity.pairs, " pairs / ", capacity.triangles, " triangles / ",
-                        capacity.tests, " test words / ", capacity.samples, " table samples: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs, ", exact tests ",
-                        on.exact_tests, ", recovered ", on.pairs_recovered, "; texel pairs deferred ", on.pairs_deferred,
-                        " of ", worked, ", fallbacks ", on.deferral_fallbacks);
+                        capacity.tests, " test words: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs,
+                        ", exact tests ", on.exact_tests, ", recovered ", on.pairs_recovered, "; pairs deferred ",
+                        on.pairs_deferred, " (", worked, " fragments past the early returns), fallbacks ",
+                        on.deferral_fallbacks);
                 CHECK(on.passes > 1);
                 if (capacity.pairs >= (1u << 20) && capacity.triangles >= (1u << 18)) {
-                    CHECK(on.pairs_deferred == worked);  // every pair in the compute pass
+                    // Every pair in the compute pass: one per view sample of each worked fragment's
+                    // list block (at least one, at most list_block); every pair walked (the cut ones and
+                    // those past the cut: pairs counts the ignored too) among them.
+                    CHECK(on.pairs_deferred >= worked);
+                    CHECK(on.pairs_deferred <= 8 * worked);
+                    CHECK(on.pairs_deferred >= off.pairs + off.pairs_cut);
                     CHECK(on.deferral_fallbacks == 0);
                 } else {
                     // The first pass overflows and is drawn again; the second's few pairs fit.
                     CHECK(on.deferral_fallbacks >= 1);
-                    CHECK(on.pairs_deferred < worked);
+                    CHECK(on.pairs_deferred < off.pairs + off.pairs_cut);
                 }
                 CHECK(on_masks == off_masks);
                 CHECK(on.fragments == off.fragments);
@@ -777,4 +781,42 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
             }
         }
     }
+}
+
+TEST_CASE("Deferred pairs: a pair's entry unpacks to its triangle slot, list-block index and texel at the options' limits") {
+    penumbra::test::context();
+    penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
+    lib.addDirectory(penumbra::test::testShaderDir());
+    const penumbra::gl::Program program = penumbra::gl::buildComputeProgram("sample_based_soft/pair_pack_test.comp.glsl", {}, lib);
+    // Slots < 2^24 (deferred_triangles <= 2^24), indices < 4096 (list_block <= 4096), texels < 8192
+    // (grid sides <= 8192): every limit, its neighbours, and random values.
+    std::vector<glm::uvec4> inputs;
+    const uint32_t slots[] = {0u, 1u, 255u, 256u, (1u << 24) - 1u};
+    const uint32_t indices[] = {0u, 1u, 255u, 256u, 4095u};
+    const uint32_t coords[] = {0u, 1u, 4096u, 8191u};
+    for (uint32_t s : slots)
+        for (uint32_t i : indices)
+            for (uint32_t x : coords)
+                for (uint32_t y : coords) inputs.emplace_back(s, i, x, y);
+    std::mt19937 rng(penumbra::test::testSeed());
+    for (int k = 0; k < 4096; ++k)
+        inputs.emplace_back(rng() % (1u << 24), rng() % 4096u, rng() % 8192u, rng() % 8192u);
+    const penumbra::gl::Buffer in = penumbra::gl::Buffer::fromVector(inputs);
+    const penumbra::gl::Buffer out(inputs.size() * sizeof(glm::uvec4));
+    glUseProgram(program.id());
+    glUniform1ui(0, static_cast<GLuint>(inputs.size()));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, in.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out.id());
+    glDispatchCompute(static_cast<GLuint>((inputs.size() + 63) / 64), 1, 1);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    const std::vector<glm::uvec4> unpacked = out.download<glm::uvec4>();
+    size_t mismatched = 0;
+    for (size_t k = 0; k < inputs.size(); ++k) {
+        if (unpacked[k] == inputs[k]) continue;
+        if (++mismatched <= 5)
+            MESSAGE("in ", inputs[k].x, " ", inputs[k].y, " ", inputs[k].z, " ", inputs[k].w, " -> ", unpacked[k].x, " ",
+                    unpacked[k].y, " ", unpacked[k].z, " ", unpacked[k].w);
+    }
+    CHECK(mismatched == 0);
+    penumbra::gl::checkErrors("pair pack test");
 }

@@ -647,14 +647,17 @@ struct SampleBasedSoftGpuOptions {
     /// on the draws of CasterClass::Closed only.
     SoftSkips skips{};
     bool count_work = true;  ///< work counters (atomics in the light pass)
-    /// Deferred pairs: capacity, in (caster triangle, light texel) pairs, of a buffer the light
-    /// pass's fragment stage appends its pairs to instead of working them; a compute pass then does
-    /// the same work per pair (light_pass.comp.glsl), densely packed, after the light pass's draws
-    /// (and again after the closed casters' second pass). Draws that append more pairs than this, or
-    /// need more triangle slots than deferred_triangles, are drawn again with the fragment-stage
-    /// program instead (decided on the GPU; SampleBasedSoftFrame::deferral_fallbacks counts them):
-    /// every capacity gives the same bits and counters. 8 bytes per pair (default 2^20: 8 MiB);
-    /// 0 = off, every pair in the fragment stage (no compute pass, one program fewer). Why:
+    /// Deferred pairs: capacity, in (caster triangle, view sample) pairs, of a buffer the light
+    /// pass's fragment stage appends its pairs to instead of working them (one per view sample of
+    /// the fragment's list block); a compute pass then does the same work with one pair per
+    /// invocation (light_pass.comp.glsl), densely packed, after the light pass's draws (and again
+    /// after the closed casters' second pass); the pairs that need the LUT's tables go on to a
+    /// tables pass (light_pass_tables.comp.glsl). Draws that append more pairs than this, or need
+    /// more triangle slots than deferred_triangles, are drawn again with the fragment-stage program
+    /// instead (decided on the GPU; SampleBasedSoftFrame::deferral_fallbacks counts them): every
+    /// capacity gives the same bits and counters. 12 bytes per pair (8 in the pairs buffer, 4 in
+    /// the tables pass's; default 2^20: 12 MiB); 0 = off, every pair in the fragment stage (no
+    /// compute pass, one program fewer). Why:
     /// fragments run in 2 x 2 quads and rasteriser tiles, partly idle at the influence regions'
     /// edges; llvmpipe runs a fragment shader's every instruction for its masked-off lanes too;
     /// and some GPUs shade fragments far slower than they run compute (an H200's fragment
@@ -662,20 +665,15 @@ struct SampleBasedSoftGpuOptions {
     /// skip on (BM_SoftSkips: all_fragment against all).
     uint32_t deferred_pairs = 1u << 20;
     /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
-    /// that emits an influence region; 40 bytes each). 0: deferred_pairs / 4 (10 MiB by default).
+    /// that emits an influence region; 40 bytes each, at most 2^24). 0: deferred_pairs / 4 (10 MiB
+    /// by default).
     uint32_t deferred_triangles = 0;
-    /// Exact tests of deferred pairs: pending mask words (16 bytes each) the compute pass hands to
+    /// Exact tests of deferred pairs: pending mask words (16 bytes each) the compute passes hand to
     /// an exact-test pass with one invocation per word (light_pass_tests.comp.glsl), instead of
     /// testing them in the pair's own loop, where a pair's lanes wait for the one with the most
     /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
     /// deferred_pairs / 4 (4 MiB by default).
     uint32_t deferred_tests = 0;
-    /// Samples of deferred pairs that need the LUT's tables (16 bytes each): the pairs' compute pass
-    /// hands them to a tables pass with one invocation per sample (light_pass_tables.comp.glsl), as
-    /// most pairs end before the tables (the whole light in front of a plane) and their lanes
-    /// would wait on the rest; past the capacity they run in the pair's pass (same bits). 0:
-    /// deferred_pairs / 2 (8 MiB by default).
-    uint32_t deferred_samples = 0;
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
     bool timings = false;
@@ -704,8 +702,6 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    o.deferred_triangles, " must be at most 16777216");
     PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
-    PENUMBRA_CHECK(o.deferred_samples <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_samples = ",
-                   o.deferred_samples, " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one

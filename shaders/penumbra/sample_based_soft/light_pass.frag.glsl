@@ -4,8 +4,8 @@
 // the triangle blocks into each sample's mask). No colour output; bind a W x H framebuffer with
 // no attachments.
 // With PENUMBRA_SBS_DEFERRED (SampleBasedSoftGpuOptions::deferred_pairs) a fragment appends
-// (triangle slot, texel) to the pairs buffer instead (light_pass.geom.glsl stored the triangle's
-// vertices in the slot) and the compute pass light_pass.comp.glsl does the same work after the
+// (triangle slot, view sample) pairs to the pairs buffer instead, one per sample of its list block
+// (light_pass.geom.glsl stored the triangle's vertices in the slot) and the compute pass light_pass.comp.glsl does the same work after the
 // draws; this program then holds no pair work at all (llvmpipe runs a shader's every instruction
 // for its masked-off lanes too: an unused fallback here cost more than the work). When the draws
 // overflow the pairs buffer or the triangle slots, the pipeline draws them again with the
@@ -39,9 +39,11 @@ layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) writeonly buffer PenumbraSb
 // blocks' fragments before they are shaded, which needs the test before the shader's stores.
 layout(early_fragment_tests) in;
 
+#if !PENUMBRA_SBS_DEFERRED
 layout(location = 0) flat in vec3 penumbraSbsVertex0;
 layout(location = 1) flat in vec3 penumbraSbsVertex1;
 layout(location = 2) flat in vec3 penumbraSbsVertex2;
+#endif
 layout(location = 3) flat in uint penumbraSbsTriangle;  // deferred pairs: the triangle's slot, or PENUMBRA_SBS_NO_TRIANGLE
 
 void main() {
@@ -84,8 +86,12 @@ void main() {
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 1u;  // the triangle found no slot
         return;
     }
-    const uint k = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], 1u);
-    if (k < uint(penumbraSbsPairs.length())) penumbraSbsPairs[k] = uvec2(penumbraSbsTriangle, texel.x | texel.y << 16u);
+    // One pair per view sample of the block: the compute pass's lanes each walk one sample (a
+    // group of lanes walking whole blocks would take as long as its longest block).
+    const uint first = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], range.y);
+    const uint capacity = uint(penumbraSbsPairs.length());
+    for (uint i = 0u; i < range.y && first + i < capacity; ++i)
+        penumbraSbsPairs[first + i] = uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, i), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, i));
 #else
     penumbraSbsTexelWork(P, texel, range, dvec3(penumbraSbsVertex0), dvec3(penumbraSbsVertex1), dvec3(penumbraSbsVertex2));
 #endif

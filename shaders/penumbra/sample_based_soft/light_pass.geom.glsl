@@ -51,9 +51,11 @@ layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) writeonly buffer Penumb
 
 #include "penumbra/influence_region/influence_region.glsl"
 
+#if !PENUMBRA_SBS_DEFERRED
 layout(location = 0) flat out vec3 penumbraSbsVertex0;
 layout(location = 1) flat out vec3 penumbraSbsVertex1;
 layout(location = 2) flat out vec3 penumbraSbsVertex2;
+#endif
 layout(location = 3) flat out uint penumbraSbsTriangle;
 
 void main() {
@@ -102,9 +104,11 @@ void main() {
     for (int j = 0; j < count; ++j) {
         const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
         gl_Position = vec4(penumbraInfluenceOut[index] / half_grid - 1.0, 0.0, 1.0);
+#if !PENUMBRA_SBS_DEFERRED
         penumbraSbsVertex0 = v0;
         penumbraSbsVertex1 = v1;
         penumbraSbsVertex2 = v2;
+#endif
         penumbraSbsTriangle = slot;
         EmitVertex();
     }

@@ -30,7 +30,7 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #define PENUMBRA_SBS_ARGS_KIND 0  // 0: the pairs' compute pass, 1: the exact-test pass, 2: the tables pass
 #endif
 #ifndef PENUMBRA_SBS_ARGS_CAPACITY
-#define PENUMBRA_SBS_ARGS_CAPACITY 0u  // SampleBasedSoftGpuOptions::deferred_pairs, deferred_tests, deferred_samples
+#define PENUMBRA_SBS_ARGS_CAPACITY 0u  // SampleBasedSoftGpuOptions::deferred_pairs, deferred_tests, deferred_pairs
 #endif
 #if PENUMBRA_SBS_ARGS_KIND == 1
 #define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_TESTS

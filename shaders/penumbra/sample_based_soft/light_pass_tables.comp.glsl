@@ -1,11 +1,11 @@
-// penumbra — sample-based soft shadows, deferred pairs' tables pass: one invocation per view sample
-// the pairs' compute pass (light_pass.comp.glsl) found to need the LUT's tables — (list slot,
-// triangle slot, texel) — running the pair's work (light_pass_work.glsl) for that one sample: the
-// same steps on the same inputs up to the tables (the pair's compute pass counted them), then the
-// tables and the exact tests (handed on to light_pass_tests.comp.glsl as far as its buffer holds
-// them). Densely packed: in the pairs' pass a group of lanes ran the tables as long as one of its
-// pairs needed them, and most end before. Dispatched indirectly (light_pass_args.comp.glsl with
-// PENUMBRA_SBS_ARGS_KIND=2).
+// penumbra — sample-based soft shadows, deferred pairs' tables pass: one invocation per pair the
+// pairs' compute pass (light_pass.comp.glsl) found to need the LUT's tables (its index in the pairs
+// buffer), running the pair's work (light_pass_work.glsl) again: the same steps on the same inputs
+// up to the tables (the pairs' pass counted them), then the tables and the exact tests (handed on
+// to light_pass_tests.comp.glsl as far as its buffer holds them). Densely packed: in the pairs'
+// pass a group of lanes would run the tables as long as one of its pairs needed them (most end
+// before), and llvmpipe would run them in every group. Dispatched indirectly
+// (light_pass_args.comp.glsl with PENUMBRA_SBS_ARGS_KIND=2).
 // Defines: light_pass_work.glsl's.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1
 // penumbra-permutation: PENUMBRA_SBS_MODE=1 PENUMBRA_SBS_COUNT_WORK=0
@@ -15,15 +15,17 @@
 
 layout(local_size_x = PENUMBRA_SBS_DEFERRAL_GROUP) in;
 
-layout(std430, binding = PENUMBRA_SBS_SAMPLES_WORK_BINDING) readonly buffer PenumbraSbsTableWorkIn { uvec4 penumbraSbsTableWork[]; };
+layout(std430, binding = PENUMBRA_SBS_TABLE_PAIRS_BINDING) readonly buffer PenumbraSbsTableWorkIn { uint penumbraSbsTableWork[]; };
+layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) readonly buffer PenumbraSbsPairs { uvec2 penumbraSbsPairs[]; };
 #include "penumbra/sample_based_soft/triangle_slots.glsl"
 
 void main() {
     const uint k = gl_GlobalInvocationID.x;
     if (k >= penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED]) return;
-    const uvec4 entry = penumbraSbsTableWork[k];
-    const uvec2 texel = uvec2(entry.z & 0xFFFFu, entry.z >> 16u);
-    penumbraSbsTestTriangle = entry.y;
-    penumbraSbsTexelWork(penumbraSbsSlotParams(entry.y), texel, uvec2(entry.x, 1u), penumbraSbsSlotVertex(entry.y, 0u),
-                         penumbraSbsSlotVertex(entry.y, 1u), penumbraSbsSlotVertex(entry.y, 2u));
+    const PenumbraSbsPair pair = penumbraSbsUnpackPair(penumbraSbsPairs[penumbraSbsTableWork[k]]);
+    const PenumbraSbsParams P = penumbraSbsSlotParams(pair.triangle);
+    penumbraSbsTestTriangle = pair.triangle;
+    const uvec2 block = penumbraSampleListsBlock(ivec2(pair.texel), P.grid.w, P.grid.z);
+    penumbraSbsTexelWork(P, pair.texel, uvec2(block.x + pair.index, 1u), penumbraSbsSlotVertex(pair.triangle, 0u),
+                         penumbraSbsSlotVertex(pair.triangle, 1u), penumbraSbsSlotVertex(pair.triangle, 2u));
 }

@@ -78,8 +78,12 @@ layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSb
 uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (the compute passes set it)
 #endif
 #if PENUMBRA_SBS_STAGE == 1
-// (list slot, triangle slot, texel x | y << 16, 0): one sample of a pair that needs the tables.
-layout(std430, binding = PENUMBRA_SBS_SAMPLES_WORK_BINDING) writeonly buffer PenumbraSbsTableWork { uvec4 penumbraSbsTableWork[]; };
+// Set by the pairs' compute pass: its pair's index in the pairs buffer, and 1 when the pair is the
+// first sample of its fragment's list block (the fragment is counted with it).
+uint penumbraSbsPairIndex, penumbraSbsFragmentPairs;
+// The pairs that need the LUT's tables, by index in the pairs buffer: as long as that buffer, so
+// never full (each pair adds at most one).
+layout(std430, binding = PENUMBRA_SBS_TABLE_PAIRS_BINDING) writeonly buffer PenumbraSbsTableWork { uint penumbraSbsTableWork[]; };
 #endif
 
 #define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraSbsCounts[list]
@@ -327,13 +331,12 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
             }
 #if PENUMBRA_SBS_STAGE == 1
             // The tables in their own pass, densely packed: here a group of lanes would run them as
-            // long as one of its pairs needs them (most end above). Past its buffer: here.
+            // long as one of its pairs needs them (most end above), and llvmpipe would run them even
+            // where none does: this pass holds no table loop at all.
             const uint entry = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SAMPLES], 1u);
-            if (entry < uint(penumbraSbsTableWork.length())) {
-                penumbraSbsTableWork[entry] = uvec4(slot, penumbraSbsTestTriangle, texel.x | texel.y << 16u, 0u);
-                continue;
-            }
-#endif
+            if (entry < uint(penumbraSbsTableWork.length())) penumbraSbsTableWork[entry] = penumbraSbsPairIndex;  // always
+            continue;
+#else
             for (uint block = 0u; block < tables; ++block) {
                 const uint table = set * tables + block;
 #if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_LUT_ID
@@ -364,6 +367,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                            uint(uncertain.z != 0u) << (4u * block + 2u) | uint(uncertain.w != 0u) << (4u * block + 3u);
 #endif
             }
+#endif
         }
 #endif
 #if PENUMBRA_SBS_DEFER_TESTS && PENUMBRA_SBS_MODE != PENUMBRA_SBS_MODE_LUT_ID
@@ -425,6 +429,10 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     // The tables pass counts what it adds: uncertain bits, unproven planes, exact tests. The pair's
     // compute pass counted the fragment and the pair (it ran the same steps up to the tables).
     pairs = ignored = unproven_pairs = cut = hard = recovered = front = 0u;
+#elif PENUMBRA_SBS_STAGE == 1
+    // The pairs' compute pass works one sample of a fragment's block per invocation: the fragment
+    // is counted with its first.
+    if (penumbraSbsFragmentPairs != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
 #else
     atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_FRAGMENTS], 1u);
 #endif

@@ -59,13 +59,13 @@
 #define PENUMBRA_SBS_DEFERRAL_BINDING 11  // uint[PENUMBRA_SBS_DEFERRAL_WORDS]: counters and dispatch arguments
 #endif
 #ifndef PENUMBRA_SBS_PAIRS_BINDING
-#define PENUMBRA_SBS_PAIRS_BINDING 12     // uvec2[deferred_pairs]: (triangle slot, texel x | y << 16)
+#define PENUMBRA_SBS_PAIRS_BINDING 12     // uvec2[deferred_pairs]: PENUMBRA_SBS_PAIR_X / _Y
 #endif
 #ifndef PENUMBRA_SBS_TESTS_BINDING
 #define PENUMBRA_SBS_TESTS_BINDING 14     // uvec4[deferred_tests]: (list slot, triangle slot, word, bits)
 #endif
-#ifndef PENUMBRA_SBS_SAMPLES_WORK_BINDING
-#define PENUMBRA_SBS_SAMPLES_WORK_BINDING 15  // uvec4[deferred_samples]: (list slot, triangle slot, texel, 0)
+#ifndef PENUMBRA_SBS_TABLE_PAIRS_BINDING
+#define PENUMBRA_SBS_TABLE_PAIRS_BINDING 15  // uint[deferred_pairs]: pairs (their index) for the tables pass
 #endif
 #ifndef PENUMBRA_SBS_TRIANGLES_BINDING
 #define PENUMBRA_SBS_TRIANGLES_BINDING 13  // uint[PENUMBRA_SBS_TRIANGLE_WORDS * deferred_triangles]: per slot
@@ -119,7 +119,7 @@
 #define PENUMBRA_SBS_WORK_PAIRS_HARD 11        // pairs outside every silhouette's region: one test from the centre
 #define PENUMBRA_SBS_WORK_PAIRS_RECOVERED 12   // culled casters' pairs evaluated after all (near receivers)
 #define PENUMBRA_SBS_WORK_PAIRS_FRONT 13       // pairs with the whole light in front of one (proven) plane: no table read
-#define PENUMBRA_SBS_WORK_DEFERRED 14          // deferred pairs: (triangle, texel) pairs the compute pass worked
+#define PENUMBRA_SBS_WORK_DEFERRED 14          // deferred pairs: (triangle, view sample) pairs the compute pass worked
 #define PENUMBRA_SBS_WORK_FALLBACKS 15         // deferred pairs: draws redrawn by the fragment stage (overflow)
 #define PENUMBRA_SBS_WORK_WORDS 16
 
@@ -133,14 +133,20 @@
 #define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws
 #define PENUMBRA_SBS_DEFERRAL_TESTS 24       // exact-test words appended by the compute pass (may exceed the capacity)
 #define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 25  // words the exact-test pass reads
-#define PENUMBRA_SBS_DEFERRAL_SAMPLES 26     // samples handed to the tables pass (may exceed the capacity)
-#define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 27  // samples the tables pass reads
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES 26     // pairs handed to the tables pass (at most the pairs dispatched)
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 27  // pairs the tables pass reads
 #define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 28   // 3 words: the exact-test pass's group counts
 #define PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS 32  // 3 words: the tables pass's group counts
 #define PENUMBRA_SBS_DEFERRAL_WORDS 36
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
 #define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16
+// A deferred pair (pairs buffer, PENUMBRA_SBS_PAIRS_BINDING): one per (triangle slot, view sample of
+// the fragment's list block), the sample as its index in the block: x = slot | (index & 0xFF) << 24,
+// y = texel x | texel y << 13 | (index >> 8) << 26 (slots < 2^24, grid sides <= 8192, list blocks
+// <= 4096 samples: the options' limits).
+#define PENUMBRA_SBS_PAIR_X(slot, index) ((slot) | ((index) & 0xFFu) << 24u)
+#define PENUMBRA_SBS_PAIR_Y(x, y, index) ((x) | (y) << 13u | ((index) >> 8u) << 26u)
 
 // Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.
 #define PENUMBRA_SBS_FLAG_SKIP_EMPTY 1u      // empty list blocks return before the caster's setup

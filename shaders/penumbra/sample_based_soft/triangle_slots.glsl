@@ -6,6 +6,17 @@
 #define PENUMBRA_SBS_TRIANGLE_SLOTS_GLSL
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
 
+/// A deferred pair's entry (PENUMBRA_SBS_PAIR_X / _Y): its triangle slot, its view sample's index in
+/// the fragment's list block, and the texel.
+struct PenumbraSbsPair {
+    uint triangle, index;
+    uvec2 texel;
+};
+PenumbraSbsPair penumbraSbsUnpackPair(uvec2 pair) {
+    return PenumbraSbsPair(pair.x & 0xFFFFFFu, pair.x >> 24u | (pair.y >> 26u) << 8u,
+                           uvec2(pair.y & 0x1FFFu, (pair.y >> 13u) & 0x1FFFu));
+}
+
 /// Vertex `i` (0..2) of slot `slot`, in fp64 (exactly the float the fragment stage would widen).
 dvec3 penumbraSbsSlotVertex(uint slot, uint i) {
     const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * slot + 3u * i;

@@ -121,10 +121,10 @@ struct SbsBindings {
     uint32_t marks = PENUMBRA_SBS_MARKS_BINDING;  ///< SoftSkips::silhouettes
     uint32_t near_samples = PENUMBRA_SBS_NEAR_BINDING;  ///< SoftSkips::closed_casters
     uint32_t deferral = PENUMBRA_SBS_DEFERRAL_BINDING;    ///< deferred pairs: counters and dispatch arguments
-    uint32_t pairs = PENUMBRA_SBS_PAIRS_BINDING;          ///< deferred pairs: (triangle slot, texel)
+    uint32_t pairs = PENUMBRA_SBS_PAIRS_BINDING;          ///< deferred pairs: (triangle slot, view sample)
     uint32_t triangles = PENUMBRA_SBS_TRIANGLES_BINDING;  ///< deferred pairs: triangle slots
     uint32_t tests = PENUMBRA_SBS_TESTS_BINDING;          ///< deferred pairs: pending exact-test words
-    uint32_t table_samples = PENUMBRA_SBS_SAMPLES_WORK_BINDING;  ///< deferred pairs: samples for the tables pass
+    uint32_t table_pairs = PENUMBRA_SBS_TABLE_PAIRS_BINDING;  ///< deferred pairs: pairs for the tables pass
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -154,9 +154,10 @@ struct SampleBasedSoftFrame {
     /// Pairs decided at once because the whole light lies in front of one (in Exact: proven) plane
     /// of the pair: no LUT table read (Lut and Exact).
     uint64_t pairs_front = 0;
-    /// Deferred pairs (options.deferred_pairs): (caster triangle, light texel) pairs the compute pass
-    /// worked: when no draw overflowed, the fragments but those skipped and those of empty list
-    /// blocks (with SoftSkips::empty_blocks off; their walk would be empty).
+    /// Deferred pairs (options.deferred_pairs): (caster triangle, view sample) pairs the compute pass
+    /// worked: when no draw overflowed, one per view sample in the list block of every fragment but
+    /// those skipped (with SoftSkips::empty_blocks off, empty blocks' fragments append none). They
+    /// include the pairs that end before `pairs` counts them (cut, not flagged near).
     uint64_t pairs_deferred = 0;
     /// Deferred pairs: passes (the first, the closed casters' second) that overflowed the pairs
     /// buffer or the triangle slots and were drawn again with the fragment-stage program.
@@ -222,7 +223,7 @@ public:
             {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples},
             {"PENUMBRA_SBS_DEFERRAL_BINDING", b.deferral},   {"PENUMBRA_SBS_PAIRS_BINDING", b.pairs},
             {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}, {"PENUMBRA_SBS_TESTS_BINDING", b.tests},
-            {"PENUMBRA_SBS_SAMPLES_WORK_BINDING", b.table_samples}};
+            {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
         const auto light_pass_program = [&](bool deferring) {
@@ -248,17 +249,14 @@ public:
             const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
             const uint32_t test_words = options_.deferred_tests ? options_.deferred_tests
                                                                 : std::max<uint32_t>(1, options_.deferred_pairs / 4);
-            const uint32_t table_samples = options_.deferred_samples ? options_.deferred_samples
-                                                                     : std::max<uint32_t>(1, options_.deferred_pairs / 2);
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
-            const uint64_t sample_bytes = uint64_t(table_samples) * 16;
+            const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
             const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS;
-            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
-                               sample_bytes <= max_block,
+            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
-                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes), ", test_words,
-                           " exact-test words (", test_bytes, " bytes) and ", table_samples, " table samples (", sample_bytes,
-                           " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
+                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes) and ", test_words,
+                           " exact-test words (", test_bytes, " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ",
+                           max_block);
             // The group counts of each compute pass (PENUMBRA_SBS_ARGS_KIND: 0 pairs, 1 exact tests, 2 tables).
             const auto args_program = [&](uint32_t kind, uint32_t capacity) {
                 ShaderDefines d = defines;
@@ -268,12 +266,12 @@ public:
             };
             deferral_args_ = args_program(0, options_.deferred_pairs);
             test_args_ = args_program(1, test_words);
-            table_args_ = args_program(2, table_samples);
+            table_args_ = args_program(2, options_.deferred_pairs);
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
             light_tests_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tests.comp.glsl", defines, library);
             light_tables_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tables.comp.glsl", defines, library);
             tests_ = gl::Buffer(test_bytes);
-            table_samples_ = gl::Buffer(sample_bytes);
+            table_pairs_ = gl::Buffer(table_bytes);
             light_fragment_ = light_pass_program(false);
             ShaderDefines fallback_defines = defines;
             fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
@@ -473,7 +471,7 @@ private:
     // program and the list-block predicates of the redraw after an overflow.
     gl::Program light_compute_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_, table_args_,
         light_tables_;
-    gl::Buffer deferral_, pairs_, triangles_, tests_, table_samples_;
+    gl::Buffer deferral_, pairs_, triangles_, tests_, table_pairs_;
     std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
@@ -605,7 +603,7 @@ private:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.pairs, pairs_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.tests, tests_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_samples, table_samples_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_pairs, table_pairs_.id());
         }
         if (!frame.sets.empty()) {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
