@@ -696,7 +696,7 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
     // that overflow them are drawn again by the fragment-stage program; pending exact-test words
     // past their buffer are tested in the compute pass's own loop.
     struct Capacity {
-        uint32_t pairs, triangles, tests;
+        uint32_t pairs, triangles, tests, fragments;
     };
     for (const std::string name : {"columns", "torus_knot"}) {
         const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
@@ -717,6 +717,7 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 options.deferred_pairs = capacity.pairs;
                 options.deferred_triangles = capacity.triangles;
                 options.deferred_tests = capacity.tests;
+                options.deferred_fragments = capacity.fragments;
                 penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
                                                           w.light.view_projection);
                 pipeline.reserve(w.samples());
@@ -728,30 +729,34 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 return pipeline.readMasks();
             };
             penumbra::SampleBasedSoftFrame off;
-            const std::vector<uint32_t> off_masks = run({0, 0, 0}, &off);
+            const std::vector<uint32_t> off_masks = run({0, 0, 0, 0}, &off);
             CHECK(std::count_if(off_masks.begin(), off_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
             CHECK(off.pairs_deferred == 0);
             CHECK(off.deferral_fallbacks == 0);
             const uint64_t worked = off.fragments - off.fragments_skipped;  // fragments past the early returns
             // Every buffer large enough; the exact-test words' small (the rest run in the passes that
-            // hand them on); the pairs' and the triangle slots' small (redrawn).
-            for (const Capacity capacity : {Capacity{1u << 20, 1u << 18, 1u << 18}, Capacity{1u << 20, 1u << 18, 8},
-                                            Capacity{64, 1u << 18, 0}, Capacity{1u << 20, 16, 0}}) {
-                if (brute && capacity.pairs == 64) break;  // the redraw does not depend on the mode: exact and lut test it
+            // hand them on); the pairs' small (the rest go whole to the fragments buffer, worked a
+            // fragment per invocation); the pairs' and the fragments' small, or the triangle slots'
+            // (redrawn).
+            for (const Capacity capacity :
+                 {Capacity{1u << 20, 1u << 18, 1u << 18, 1u << 18}, Capacity{1u << 20, 1u << 18, 8, 1u << 18},
+                  Capacity{64, 1u << 18, 0, 1u << 18}, Capacity{64, 1u << 18, 0, 16}, Capacity{1u << 20, 16, 0, 0}}) {
+                if (brute && capacity.fragments == 16) break;  // the redraw does not depend on the mode: exact and lut test it
                 CAPTURE(name);
                 CAPTURE(mode_name);
                 CAPTURE(capacity.pairs);
                 CAPTURE(capacity.triangles);
                 CAPTURE(capacity.tests);
+                CAPTURE(capacity.fragments);
                 penumbra::SampleBasedSoftFrame on;
                 const std::vector<uint32_t> on_masks = run(capacity, &on);
                 MESSAGE(name, " ", mode_name, ", capacity ", capacity.pairs, " pairs / ", capacity.triangles, " triangles / ",
-                        capacity.tests, " test words: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs,
+                        capacity.tests, " test words / ", capacity.fragments, " fragments: passes ", on.passes, ", fragments ", on.fragments, ", pairs ", on.pairs,
                         ", exact tests ", on.exact_tests, ", recovered ", on.pairs_recovered, "; pairs deferred ",
                         on.pairs_deferred, " (", worked, " fragments past the early returns), fallbacks ",
                         on.deferral_fallbacks);
                 CHECK(on.passes > 1);
-                if (capacity.pairs >= (1u << 20) && capacity.triangles >= (1u << 18)) {
+                if (capacity.fragments >= (1u << 18) && capacity.triangles >= (1u << 18)) {
                     // Every pair in the compute pass: one per view sample of each worked fragment's
                     // list block (at least one, at most list_block); every pair walked (the cut ones and
                     // those past the cut: pairs counts the ignored too) among them.
@@ -759,6 +764,7 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                     CHECK(on.pairs_deferred <= 8 * worked);
                     CHECK(on.pairs_deferred >= off.pairs + off.pairs_cut);
                     CHECK(on.deferral_fallbacks == 0);
+                    if (capacity.pairs == 64) CHECK(on.pairs_deferred > 2 * 64);  // most by the per-fragment program
                 } else {
                     // The first pass overflows and is drawn again; the second's few pairs fit.
                     CHECK(on.deferral_fallbacks >= 1);

@@ -652,10 +652,11 @@ struct SampleBasedSoftGpuOptions {
     /// the fragment's list block); a compute pass then does the same work with one pair per
     /// invocation (light_pass.comp.glsl), densely packed, after the light pass's draws (and again
     /// after the closed casters' second pass); the pairs that need the LUT's tables go on to a
-    /// tables pass (light_pass_tables.comp.glsl). Draws that append more pairs than this, or need
-    /// more triangle slots than deferred_triangles, are drawn again with the fragment-stage program
-    /// instead (decided on the GPU; SampleBasedSoftFrame::deferral_fallbacks counts them): every
-    /// capacity gives the same bits and counters. 12 bytes per pair (8 in the pairs buffer, 4 in
+    /// tables pass (light_pass_tables.comp.glsl). Fragments whose pairs do not fit go whole to
+    /// deferred_fragments; draws that overflow that too, or need more triangle slots than
+    /// deferred_triangles, are drawn again with the fragment-stage program instead (decided on
+    /// the GPU; SampleBasedSoftFrame::deferral_fallbacks counts them): every capacity gives the
+    /// same bits and counters. 12 bytes per pair (8 in the pairs buffer, 4 in
     /// the tables pass's; default 2^20: 12 MiB); 0 = off, every pair in the fragment stage (no
     /// compute pass, one program fewer). Why:
     /// fragments run in 2 x 2 quads and rasteriser tiles, partly idle at the influence regions'
@@ -668,6 +669,13 @@ struct SampleBasedSoftGpuOptions {
     /// that emits an influence region; 40 bytes each, at most 2^24). 0: deferred_pairs / 4 (10 MiB
     /// by default).
     uint32_t deferred_triangles = 0;
+    /// Deferred pairs: fragments whose pairs do not fit the pairs buffer (8 bytes each). They are
+    /// appended whole, (triangle slot, texel), and worked by the compute pass's per-fragment
+    /// program, one fragment's list block per invocation (slower per pair, as a group of lanes
+    /// waits for its longest block and runs the tables in every pair's place, but no redraw);
+    /// only draws that overflow this too are drawn again with the fragment-stage program. 0:
+    /// deferred_pairs / 2 (4 MiB by default).
+    uint32_t deferred_fragments = 0;
     /// Exact tests of deferred pairs: pending mask words (16 bytes each) the compute passes hand to
     /// an exact-test pass with one invocation per word (light_pass_tests.comp.glsl), instead of
     /// testing them in the pair's own loop, where a pair's lanes wait for the one with the most
@@ -700,6 +708,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.deferred_triangles <= (1u << 24), "penumbra::SampleBasedSoftShadows: deferred_triangles = ",
                    o.deferred_triangles, " must be at most 16777216");
+    PENUMBRA_CHECK(o.deferred_fragments <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_fragments = ",
+                   o.deferred_fragments, " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
 }

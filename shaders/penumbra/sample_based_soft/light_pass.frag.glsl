@@ -5,10 +5,11 @@
 // no attachments.
 // With PENUMBRA_SBS_DEFERRED (SampleBasedSoftGpuOptions::deferred_pairs) a fragment appends
 // (triangle slot, view sample) pairs to the pairs buffer instead, one per sample of its list block
-// (light_pass.geom.glsl stored the triangle's vertices in the slot) and the compute pass light_pass.comp.glsl does the same work after the
-// draws; this program then holds no pair work at all (llvmpipe runs a shader's every instruction
-// for its masked-off lanes too: an unused fallback here cost more than the work). When the draws
-// overflow the pairs buffer or the triangle slots, the pipeline draws them again with the
+// (light_pass.geom.glsl stored the triangle's vertices in the slot), or, past that buffer's
+// capacity, (triangle slot, texel) to the fragments buffer; the compute pass light_pass.comp.glsl
+// does the same work after the draws. This program holds no pair work at all (llvmpipe runs a
+// shader's every instruction for its masked-off lanes too: an unused fallback here cost more than
+// the work). When the draws overflow the fragments buffer or the triangle slots, the pipeline draws them again with the
 // program without PENUMBRA_SBS_DEFERRED (decided on the GPU) and the compute pass does nothing;
 // this program's counters wait in the deferral buffer until that is decided
 // (light_pass_args.comp.glsl). Either way every pair's work is the same function on the same
@@ -29,6 +30,7 @@
 #if PENUMBRA_SBS_DEFERRED
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) writeonly buffer PenumbraSbsPairs { uvec2 penumbraSbsPairs[]; };
+layout(std430, binding = PENUMBRA_SBS_FRAGMENTS_BINDING) writeonly buffer PenumbraSbsFragments { uvec2 penumbraSbsFragments[]; };
 // Counters wait in the deferral buffer (kept only when the draws did not overflow).
 #define PENUMBRA_SBS_COUNT(index) atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + (index)], 1u)
 #else
@@ -87,11 +89,21 @@ void main() {
         return;
     }
     // One pair per view sample of the block: the compute pass's lanes each walk one sample (a
-    // group of lanes walking whole blocks would take as long as its longest block).
+    // group of lanes walking whole blocks would take as long as its longest block). A block that
+    // does not fit the pairs buffer goes whole to the fragments buffer (the compute pass walks it
+    // in one invocation); the one that straddles the capacity leaves its share below it empty.
     const uint first = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], range.y);
     const uint capacity = uint(penumbraSbsPairs.length());
-    for (uint i = 0u; i < range.y && first + i < capacity; ++i)
-        penumbraSbsPairs[first + i] = uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, i), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, i));
+    const bool fits = first < capacity && range.y <= capacity - first;
+    const uint end = fits ? first + range.y : max(first, capacity);
+    for (uint k = first; k < end; ++k)
+        penumbraSbsPairs[k] = fits ? uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, k - first), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, k - first))
+                                   : uvec2(0u, PENUMBRA_SBS_PAIR_EMPTY);
+    if (!fits) {
+        if (first < capacity) penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY] = capacity - first;
+        const uint f = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS], 1u);
+        if (f < uint(penumbraSbsFragments.length())) penumbraSbsFragments[f] = uvec2(penumbraSbsTriangle, texel.x | texel.y << 16u);
+    }
 #else
     penumbraSbsTexelWork(P, texel, range, dvec3(penumbraSbsVertex0), dvec3(penumbraSbsVertex1), dvec3(penumbraSbsVertex2));
 #endif

@@ -1,15 +1,16 @@
 // penumbra — sample-based soft shadows, deferred pairs: after light-pass draws, decides what the
-// compute pass light_pass.comp.glsl works. When the draws appended at most the pairs buffer's
-// capacity (PENUMBRA_SBS_ARGS_CAPACITY pairs) and every fragment's triangle had a slot, it
-// writes glDispatchComputeIndirect's group counts for those pairs and adds the draws' waiting
-// counters to the work counters; otherwise (overflow) it dispatches nothing, drops the waiting
-// counters and sets the fallback flag, on which the pipeline draws the same draws again with the
+// compute pass light_pass.comp.glsl works. When the fragments that did not fit the pairs buffer
+// fit the fragments buffer (PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY) and every fragment's triangle had
+// a slot, it writes glDispatchComputeIndirect's group counts for the pairs (at most
+// PENUMBRA_SBS_ARGS_CAPACITY) and for those fragments, and adds the draws' waiting counters to the
+// work counters; otherwise (overflow) it dispatches nothing, drops the waiting counters and sets
+// the fallback flag, on which the pipeline draws the same draws again with the
 // fragment-stage program (its list-block predicates read the flag: blocks.frag.glsl). Then it
 // resets the append counters for the next draws. One invocation. PENUMBRA_SBS_ARGS_KIND=1 and 2:
 // the same for the exact-test pass (light_pass_tests.comp.glsl) and the tables pass
 // (light_pass_tables.comp.glsl), after the passes that fill their buffers: the entries appended, up
 // to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work).
-// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY=256u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
@@ -32,6 +33,9 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #ifndef PENUMBRA_SBS_ARGS_CAPACITY
 #define PENUMBRA_SBS_ARGS_CAPACITY 0u  // SampleBasedSoftGpuOptions::deferred_pairs, deferred_tests, deferred_pairs
 #endif
+#ifndef PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY
+#define PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY 0u  // kind 0: SampleBasedSoftGpuOptions::deferred_fragments
+#endif
 #if PENUMBRA_SBS_ARGS_KIND == 1
 #define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_TESTS
 #define PENUMBRA_SBS_ARGS_DISPATCHED PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED
@@ -51,13 +55,20 @@ void main() {
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS + 2] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER] = 0u;
 #else
-    const uint pairs = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS];
-    const bool overflow = pairs > uint(PENUMBRA_SBS_ARGS_CAPACITY) || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
-    const uint dispatched = overflow ? 0u : pairs;
+    const uint pairs = min(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], uint(PENUMBRA_SBS_ARGS_CAPACITY));
+    const uint fragments = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS];
+    const bool overflow = fragments > uint(PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY) ||
+                          penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u;
+    const uint dispatched = overflow ? 0u : pairs, fragments_dispatched = overflow ? 0u : fragments;
+    const uint group = uint(PENUMBRA_SBS_DEFERRAL_GROUP);
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_DISPATCHED] = dispatched;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = (dispatched + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = (dispatched + group - 1u) / group;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS + 1] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS + 2] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED] = fragments_dispatched;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS] = (fragments_dispatched + group - 1u) / group;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS + 1] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS + 2] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FALLBACK] = overflow ? 1u : 0u;
     for (uint i = 0u; i < uint(PENUMBRA_SBS_WORK_WORDS); ++i) {
 #if PENUMBRA_SBS_COUNT_WORK
@@ -66,10 +77,14 @@ void main() {
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + i] = 0u;
     }
 #if PENUMBRA_SBS_COUNT_WORK
-    penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED] += dispatched;
+    // The pairs dispatched but the straddling fragment's empty ones (the per-fragment pass counts
+    // its own).
+    if (!overflow) penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED] += dispatched - penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY];
     if (overflow) penumbraSbsWork[PENUMBRA_SBS_WORK_FALLBACKS] += 1u;
 #endif
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] = 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS] = 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 0u;
 #endif

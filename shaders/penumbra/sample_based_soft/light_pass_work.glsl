@@ -45,11 +45,16 @@
 #endif
 #ifndef PENUMBRA_SBS_STAGE
 // 0: the whole pair (the fragment-stage program); deferred pairs: 1 the pairs' compute pass
-// (light_pass.comp.glsl), which hands each sample that needs the LUT's tables to 2, the tables pass
-// (light_pass_tables.comp.glsl); both hand their pending exact-test words to the exact-test pass.
+// (light_pass.comp.glsl), which hands each pair that needs the LUT's tables to 2, the tables pass
+// (light_pass_tables.comp.glsl), except with PENUMBRA_SBS_PER_FRAGMENT (a fragment's whole block
+// per invocation: the tables too); all hand their pending exact-test words to the exact-test pass.
 #define PENUMBRA_SBS_STAGE 0
 #endif
 #define PENUMBRA_SBS_DEFER_TESTS (PENUMBRA_SBS_STAGE != 0)
+#ifndef PENUMBRA_SBS_PER_FRAGMENT
+#define PENUMBRA_SBS_PER_FRAGMENT 0  // 1: stage 1 walks a whole fragment's block, the tables included
+#endif
+#define PENUMBRA_SBS_TABLES_HANDED_ON (PENUMBRA_SBS_STAGE == 1 && !PENUMBRA_SBS_PER_FRAGMENT)
 
 layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
     PenumbraSbsParams penumbraSbsParams;
@@ -78,9 +83,12 @@ layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSb
 uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (the compute passes set it)
 #endif
 #if PENUMBRA_SBS_STAGE == 1
-// Set by the pairs' compute pass: its pair's index in the pairs buffer, and 1 when the pair is the
-// first sample of its fragment's list block (the fragment is counted with it).
-uint penumbraSbsPairIndex, penumbraSbsFragmentPairs;
+// Set by the compute pass: 1 when its pair is the first sample of its fragment's list block (the
+// fragment is counted with it; always, a fragment per invocation).
+uint penumbraSbsFragmentPairs;
+#endif
+#if PENUMBRA_SBS_TABLES_HANDED_ON
+uint penumbraSbsPairIndex;  // the pair's index in the pairs buffer (the compute pass sets it)
 // The pairs that need the LUT's tables, by index in the pairs buffer: as long as that buffer, so
 // never full (each pair adds at most one).
 layout(std430, binding = PENUMBRA_SBS_TABLE_PAIRS_BINDING) writeonly buffer PenumbraSbsTableWork { uint penumbraSbsTableWork[]; };
@@ -329,7 +337,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 ++front;
                 continue;
             }
-#if PENUMBRA_SBS_STAGE == 1
+#if PENUMBRA_SBS_TABLES_HANDED_ON
             // The tables in their own pass, densely packed: here a group of lanes would run them as
             // long as one of its pairs needs them (most end above), and llvmpipe would run them even
             // where none does: this pass holds no table loop at all.

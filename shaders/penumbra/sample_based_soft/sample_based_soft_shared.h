@@ -53,8 +53,9 @@
 #define PENUMBRA_SBS_HEADER_BINDING 5     // the lists' header (block predicate pass only)
 #endif
 // Deferred pairs (SampleBasedSoftGpuOptions::deferred_pairs): the geometry stage stores each
-// triangle's world vertices, the fragment stage appends (triangle, texel) pairs, a compute pass
-// does their work (light_pass.comp.glsl).
+// triangle's world vertices, the fragment stage appends (triangle, view sample) pairs, a compute
+// pass does their work (light_pass.comp.glsl); fragments whose pairs do not fit append themselves
+// to the fragments buffer instead, worked by the same pass a fragment per invocation.
 #ifndef PENUMBRA_SBS_DEFERRAL_BINDING
 #define PENUMBRA_SBS_DEFERRAL_BINDING 11  // uint[PENUMBRA_SBS_DEFERRAL_WORDS]: counters and dispatch arguments
 #endif
@@ -69,6 +70,9 @@
 #endif
 #ifndef PENUMBRA_SBS_TRIANGLES_BINDING
 #define PENUMBRA_SBS_TRIANGLES_BINDING 13  // uint[PENUMBRA_SBS_TRIANGLE_WORDS * deferred_triangles]: per slot
+#endif
+#ifndef PENUMBRA_SBS_FRAGMENTS_BINDING
+#define PENUMBRA_SBS_FRAGMENTS_BINDING 16  // uvec2[deferred_fragments]: (triangle slot, texel x | y << 16)
 #endif
 // Resolve.
 #ifndef PENUMBRA_SBS_SLOTS_BINDING
@@ -137,7 +141,11 @@
 #define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 27  // pairs the tables pass reads
 #define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 28   // 3 words: the exact-test pass's group counts
 #define PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS 32  // 3 words: the tables pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 36
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS 35   // fragments appended to the fragments buffer (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED 36  // fragments the per-fragment pass reads
+#define PENUMBRA_SBS_DEFERRAL_EMPTY 37       // empty pairs below the capacity (the one fragment that straddled it)
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS 40  // 3 words: the per-fragment pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_WORDS 44
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
 #define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16
@@ -147,6 +155,7 @@
 // <= 4096 samples: the options' limits).
 #define PENUMBRA_SBS_PAIR_X(slot, index) ((slot) | ((index) & 0xFFu) << 24u)
 #define PENUMBRA_SBS_PAIR_Y(x, y, index) ((x) | (y) << 13u | ((index) >> 8u) << 26u)
+#define PENUMBRA_SBS_PAIR_EMPTY 0xFFFFFFFFu  // y of an empty pair (index bits 63 << 8: no list block has it)
 
 // Skip flags (params.reserved.y): penumbra::SoftSkips, and the class of the draw.
 #define PENUMBRA_SBS_FLAG_SKIP_EMPTY 1u      // empty list blocks return before the caster's setup

@@ -125,6 +125,7 @@ struct SbsBindings {
     uint32_t triangles = PENUMBRA_SBS_TRIANGLES_BINDING;  ///< deferred pairs: triangle slots
     uint32_t tests = PENUMBRA_SBS_TESTS_BINDING;          ///< deferred pairs: pending exact-test words
     uint32_t table_pairs = PENUMBRA_SBS_TABLE_PAIRS_BINDING;  ///< deferred pairs: pairs for the tables pass
+    uint32_t fragments = PENUMBRA_SBS_FRAGMENTS_BINDING;      ///< deferred pairs: fragments past the pairs buffer
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -223,7 +224,7 @@ public:
             {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples},
             {"PENUMBRA_SBS_DEFERRAL_BINDING", b.deferral},   {"PENUMBRA_SBS_PAIRS_BINDING", b.pairs},
             {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}, {"PENUMBRA_SBS_TESTS_BINDING", b.tests},
-            {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}};
+            {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}, {"PENUMBRA_SBS_FRAGMENTS_BINDING", b.fragments}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
         const auto light_pass_program = [&](bool deferring) {
@@ -249,29 +250,38 @@ public:
             const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
             const uint32_t test_words = options_.deferred_tests ? options_.deferred_tests
                                                                 : std::max<uint32_t>(1, options_.deferred_pairs / 4);
+            const uint32_t fragments = options_.deferred_fragments ? options_.deferred_fragments
+                                                                   : std::max<uint32_t>(1, options_.deferred_pairs / 2);
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
+            const uint64_t fragment_bytes = uint64_t(fragments) * 8;
             const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
             const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS;
-            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block,
+            PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
+                               fragment_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
-                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes) and ", test_words,
-                           " exact-test words (", test_bytes, " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ",
-                           max_block);
+                           " bytes), ", triangles, " triangle slots (", triangle_bytes, " bytes), ", test_words,
+                           " exact-test words (", test_bytes, " bytes) and ", fragments, " fragments (", fragment_bytes,
+                           " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
             // The group counts of each compute pass (PENUMBRA_SBS_ARGS_KIND: 0 pairs, 1 exact tests, 2 tables).
             const auto args_program = [&](uint32_t kind, uint32_t capacity) {
                 ShaderDefines d = defines;
                 d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
                 d.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(capacity) + "u"});
+                d.push_back({"PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY", std::to_string(fragments) + "u"});
                 return gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_args.comp.glsl", d, library);
             };
             deferral_args_ = args_program(0, options_.deferred_pairs);
             test_args_ = args_program(1, test_words);
             table_args_ = args_program(2, options_.deferred_pairs);
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
+            ShaderDefines per_fragment = defines;
+            per_fragment.push_back({"PENUMBRA_SBS_PER_FRAGMENT", "1"});
+            light_fragments_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", per_fragment, library);
             light_tests_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tests.comp.glsl", defines, library);
             light_tables_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_tables.comp.glsl", defines, library);
             tests_ = gl::Buffer(test_bytes);
             table_pairs_ = gl::Buffer(table_bytes);
+            fragments_ = gl::Buffer(fragment_bytes);
             light_fragment_ = light_pass_program(false);
             ShaderDefines fallback_defines = defines;
             fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
@@ -469,9 +479,9 @@ private:
     gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
-    gl::Program light_compute_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_, table_args_,
-        light_tables_;
-    gl::Buffer deferral_, pairs_, triangles_, tests_, table_pairs_;
+    gl::Program light_compute_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
+        table_args_, light_tables_;
+    gl::Buffer deferral_, pairs_, triangles_, tests_, table_pairs_, fragments_;
     std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
@@ -542,9 +552,10 @@ private:
     }
 
     /// Deferred pairs, after `pass` drew with the deferring program: the pairs it appended worked by
-    /// the compute pass (group counts written on the GPU: nothing read back), or, when it overflowed
-    /// the pairs buffer or the triangle slots, `pass` drawn again with the fragment-stage program
-    /// under predicates that hold only then (and the compute pass given nothing).
+    /// the compute pass, and the fragments past the pairs buffer by its per-fragment program (group
+    /// counts written on the GPU: nothing read back), or, when it overflowed the fragments buffer
+    /// or the triangle slots, `pass` drawn again with the fragment-stage program under predicates
+    /// that hold only then (and the compute passes given nothing).
     template <class Pass>
     void workDeferredPairs(const Pass& pass, const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) {
         if (options_.deferred_pairs == 0) return;
@@ -556,7 +567,9 @@ private:
         bindParams(0);  // the compute pass takes each pair's list block and flags from its triangle slot
         glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
         glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_ARGS * 4));
-        // The samples it handed to the tables pass, then every exact test handed on by either.
+        light_fragments_.use();  // no groups unless the pairs buffer filled up
+        glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS * 4));
+        // The pairs handed to the tables pass, then every exact test handed on by any.
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         table_args_.use();
         glDispatchCompute(1, 1, 1);
@@ -604,6 +617,7 @@ private:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.tests, tests_.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_pairs, table_pairs_.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.fragments, fragments_.id());
         }
         if (!frame.sets.empty()) {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
