@@ -366,9 +366,13 @@ struct Ours {
         o.grid_width = o.grid_height = sizes().grid;
         o.max_list_blocks = 256;  // lists up to 4096 samples (the ground seen at a grazing angle)
         o.count_work = count_work;
-        // Deferred pairs sized to the view as an engine would (the scenes here take 20-60 texel
-        // pairs per view sample; a draw that overflows is drawn again by the fragment stage).
-        o.deferred_pairs = std::min<uint32_t>(65535u * 256u, std::max<uint32_t>(o.deferred_pairs, sizes().width * sizes().height * 128u));
+        // Deferred pairs sized to the view as an engine would (the scenes here take 20-60 pairs per
+        // view sample, up to ~480 with the largest light; fragments past the pairs buffer go whole
+        // to the fragments buffer, and a draw that overflows that too is drawn again by the
+        // fragment stage).
+        const uint32_t per_view = std::min<uint32_t>(65535u * 256u, sizes().width * sizes().height * 128u);
+        o.deferred_pairs = std::max<uint32_t>(o.deferred_pairs, per_view);
+        o.deferred_fragments = std::min<uint32_t>(65535u * 256u, 2 * per_view);
         o.deferred_triangles = 1u << 18;
         return o;
     }
