@@ -92,8 +92,12 @@ void main() {
     // group of lanes walking whole blocks would take as long as its longest block). A block that
     // does not fit the pairs buffer goes whole to the fragments buffer (the compute pass walks it
     // in one invocation); the one that straddles the capacity leaves its share below it empty.
-    const uint first = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], range.y);
+    // Once the buffer is full no fragment adds to its counter, which cannot wrap around then (at
+    // most the fragments in flight add past the capacity, each at most a list block).
     const uint capacity = uint(penumbraSbsPairs.length());
+    const uint first = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] >= capacity
+                           ? capacity
+                           : atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], range.y);
     const bool fits = first < capacity && range.y <= capacity - first;
     const uint end = fits ? first + range.y : max(first, capacity);
     for (uint k = first; k < end; ++k)
