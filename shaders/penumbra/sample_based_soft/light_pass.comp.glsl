@@ -34,16 +34,11 @@ void main() {
     const uint k = gl_GlobalInvocationID.x;
     if (k >= penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED]) return;
     const uvec2 entry = penumbraSbsFragments[k];
-    const uvec2 texel = uvec2(entry.y & 0xFFFFu, entry.y >> 16u);
-    const PenumbraSbsParams P = penumbraSbsSlotParams(entry.x);
-    penumbraSbsTestTriangle = entry.x;
     penumbraSbsFragmentPairs = 1u;
-    const uvec2 range = penumbraSampleListsBlock(ivec2(texel), P.grid.w, P.grid.z);
+    const uvec2 range = penumbraSbsSlotWork(entry.x, uvec2(entry.y & 0xFFFFu, entry.y >> 16u), PENUMBRA_SBS_WHOLE_BLOCK);
 #if PENUMBRA_SBS_COUNT_WORK
     atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED], range.y);
 #endif
-    penumbraSbsTexelWork(P, texel, range, penumbraSbsSlotVertex(entry.x, 0u), penumbraSbsSlotVertex(entry.x, 1u),
-                         penumbraSbsSlotVertex(entry.x, 2u));
 }
 #else
 layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) readonly buffer PenumbraSbsPairs { uvec2 penumbraSbsPairs[]; };
@@ -54,12 +49,8 @@ void main() {
     const uvec2 entry = penumbraSbsPairs[k];
     if (entry.y == PENUMBRA_SBS_PAIR_EMPTY) return;
     const PenumbraSbsPair pair = penumbraSbsUnpackPair(entry);
-    const PenumbraSbsParams P = penumbraSbsSlotParams(pair.triangle);
-    penumbraSbsTestTriangle = pair.triangle;
     penumbraSbsPairIndex = k;
     penumbraSbsFragmentPairs = pair.index == 0u ? 1u : 0u;
-    const uvec2 block = penumbraSampleListsBlock(ivec2(pair.texel), P.grid.w, P.grid.z);
-    penumbraSbsTexelWork(P, pair.texel, uvec2(block.x + pair.index, 1u), penumbraSbsSlotVertex(pair.triangle, 0u),
-                         penumbraSbsSlotVertex(pair.triangle, 1u), penumbraSbsSlotVertex(pair.triangle, 2u));
+    penumbraSbsSlotWork(pair.triangle, pair.texel, pair.index);
 }
 #endif

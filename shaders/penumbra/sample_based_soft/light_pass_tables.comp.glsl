@@ -23,9 +23,5 @@ void main() {
     const uint k = gl_GlobalInvocationID.x;
     if (k >= penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED]) return;
     const PenumbraSbsPair pair = penumbraSbsUnpackPair(penumbraSbsPairs[penumbraSbsTableWork[k]]);
-    const PenumbraSbsParams P = penumbraSbsSlotParams(pair.triangle);
-    penumbraSbsTestTriangle = pair.triangle;
-    const uvec2 block = penumbraSampleListsBlock(ivec2(pair.texel), P.grid.w, P.grid.z);
-    penumbraSbsTexelWork(P, pair.texel, uvec2(block.x + pair.index, 1u), penumbraSbsSlotVertex(pair.triangle, 0u),
-                         penumbraSbsSlotVertex(pair.triangle, 1u), penumbraSbsSlotVertex(pair.triangle, 2u));
+    penumbraSbsSlotWork(pair.triangle, pair.texel, pair.index);
 }

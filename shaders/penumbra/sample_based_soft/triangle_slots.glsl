@@ -1,7 +1,9 @@
 // penumbra — sample-based soft shadows, deferred pairs: the triangle slots the light pass's
 // geometry stage wrote (light_pass.geom.glsl), read by the compute passes: a slot holds the
 // triangle's three float vertices as bits and its draw's list block and flags, the only fields in
-// which the draws' parameter blocks differ.
+// which the draws' parameter blocks differ. Also the pairs' entries (unpacked) and, after
+// light_pass_work.glsl in the pairs and tables passes, a slot's work on a texel
+// (penumbraSbsSlotWork).
 #ifndef PENUMBRA_SBS_TRIANGLE_SLOTS_GLSL
 #define PENUMBRA_SBS_TRIANGLE_SLOTS_GLSL
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
@@ -31,4 +33,20 @@ PenumbraSbsParams penumbraSbsSlotParams(uint slot) {
     P.reserved.y = draw >> 16u;
     return P;
 }
+
+#if defined(PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL) && PENUMBRA_SBS_STAGE != 0  // the pairs and tables passes
+/// The compute passes' work (light_pass_work.glsl's penumbraSbsTexelWork) of slot `slot`'s triangle
+/// on `texel`'s list block of the slot's draw: the whole block, or only its sample `index`
+/// (PENUMBRA_SBS_WHOLE_BLOCK: all). Returns the range of list slots worked.
+#define PENUMBRA_SBS_WHOLE_BLOCK 0xFFFFFFFFu
+uvec2 penumbraSbsSlotWork(uint slot, uvec2 texel, uint index) {
+    const PenumbraSbsParams P = penumbraSbsSlotParams(slot);
+    penumbraSbsTestTriangle = slot;
+    uvec2 range = penumbraSampleListsBlock(ivec2(texel), P.grid.w, P.grid.z);
+    if (index != PENUMBRA_SBS_WHOLE_BLOCK) range = uvec2(range.x + index, 1u);
+    penumbraSbsTexelWork(P, texel, range, penumbraSbsSlotVertex(slot, 0u), penumbraSbsSlotVertex(slot, 1u),
+                         penumbraSbsSlotVertex(slot, 2u));
+    return range;
+}
+#endif
 #endif
