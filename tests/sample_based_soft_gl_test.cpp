@@ -328,7 +328,19 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
     CHECK(penumbra::test::contains(
         penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
         "deferred_fragments = 16776961"));
-    options.deferred_pairs = options.deferred_fragments = 0;
+    options.deferred_fragments = 0;
+    // A binding past the driver's limit is named at construction (with deferral off, the deferred
+    // passes' bindings are not used).
+    penumbra::SbsBindings far_bindings;
+    far_bindings.fragments = uint32_t(penumbra::gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS));
+    CHECK(penumbra::test::contains(penumbra::test::errorOf([&] {
+                                       penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp,
+                                                                          penumbra::ShaderLibrary::embedded(), far_bindings);
+                                   }),
+                                   "PENUMBRA_SBS_FRAGMENTS_BINDING = "));
+    options.deferred_pairs = 0;
+    CHECK_NOTHROW(penumbra::SampleBasedSoftShadows(options, sets, &seed_lut, influence, vp, penumbra::ShaderLibrary::embedded(),
+                                                   far_bindings));
     penumbra::SampleBasedSoftShadows pipeline(options, sets, &seed_lut, influence, vp);
     const penumbra::gl::Buffer positions(16 * 4);
     const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};

@@ -94,6 +94,7 @@
 
 #include <cstring>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -227,6 +228,19 @@ public:
             {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}, {"PENUMBRA_SBS_FRAGMENTS_BINDING", b.fragments}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
+        // Every binding a program uses below the driver's limit (GL's minimum is 8 storage
+        // bindings; the defaults reach 16 with deferred pairs, the last six entries above).
+        const GLint max_storage = gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
+        const GLint max_uniform = gl::getInteger(GL_MAX_UNIFORM_BUFFER_BINDINGS);
+        const size_t binding_count = std::size(binding_defines) - (deferred ? 0 : 6);
+        for (size_t i = 0; i < binding_count; ++i) {
+            const bool uniform = i < 2;  // params, influence
+            const GLint limit = uniform ? max_uniform : max_storage;
+            PENUMBRA_CHECK(binding_defines[i].second < static_cast<uint32_t>(std::max<GLint>(limit, 0)),
+                           "penumbra::SampleBasedSoftShadows: ", binding_defines[i].first, " = ", binding_defines[i].second,
+                           " is not below ", uniform ? "GL_MAX_UNIFORM_BUFFER_BINDINGS = " : "GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS = ",
+                           limit, " (choose lower SbsBindings", deferred ? ", or set deferred_pairs = 0)" : ")");
+        }
         const auto light_pass_program = [&](bool deferring) {
             ShaderDefines d = defines;
             d.push_back({"PENUMBRA_SBS_DEFERRED", deferring ? "1" : "0"});
