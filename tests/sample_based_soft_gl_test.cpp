@@ -581,7 +581,9 @@ TEST_CASE("SoftSkips::empty_blocks: the occupancy stencil changes no bit and no 
     CHECK(on.overflow == 0);
     CHECK(std::count_if(masks[1].begin(), masks[1].end(), [](uint32_t m) { return m != 0u; }) > 0);
     CHECK(masks[1] == masks[0]);
-    // The stencil culls the empty blocks' fragments before shading; count_work draws them once more.
+    // The stencil culls the empty blocks' fragments before shading, and in the closed casters'
+    // second pass the texels without a flagged receiver (near_stencil.frag.glsl); count_work draws
+    // them once more.
     CHECK(on.fragments == off.fragments);
     CHECK(on.fragments_skipped > 0);
     CHECK(on.fragments_skipped > off.fragments_skipped);  // off: only the closed casters' second pass skips

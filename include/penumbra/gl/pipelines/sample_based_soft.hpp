@@ -68,7 +68,9 @@
 //             slots, nothing is dispatched and a second set of list-block predicates (one point
 //             per block, true only then) draws the same blocks again with the fragment-stage
 //             program; with skips.closed_casters then once more per block with Closed (the culled
-//             triangles, for the receivers that need them) and (3b) again, (4) resolve. Nothing
+//             triangles, for the receivers that need them; with skips.empty_blocks a full-screen
+//             triangle first zeroes the stencil on the texels without such a receiver) and (3b)
+//             again, (4) resolve. Nothing
 //             is read back, queried, allocated or thrown: misuse returns a Status.
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
@@ -313,6 +315,9 @@ public:
         if (options_.skips.empty_blocks) {
             occupancy_ = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/occupancy.frag.glsl"},
                                           defines, library);
+            if (options_.skips.closed_casters)
+                near_stencil_ = gl::buildProgram(
+                    {"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/near_stencil.frag.glsl"}, defines, library);
             stencil_ = gl::Renderbuffer::create();
             glNamedRenderbufferStorage(stencil_.id(), GL_STENCIL_INDEX8, static_cast<GLsizei>(options_.grid_width),
                                        static_cast<GLsizei>(options_.grid_height));
@@ -490,7 +495,7 @@ private:
     InfluenceRegionSetup influence_;
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
-    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_;
+    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
     gl::Program light_compute_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
@@ -754,6 +759,20 @@ private:
         workDeferredPairs(first_pass, masks, lut_table, frame);
         if (options_.skips.closed_casters) {
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the first pass's near flags
+            if (stencil) {
+                // The occupancy stencil drops to 0 on the texels without a flagged sample: the
+                // second pass's fragments there would only return (light_pass.frag.glsl).
+                near_stencil_.use();
+                glBindVertexArray(empty_vao_.id());
+                bindParams(1 + 2);
+                glEnable(GL_STENCIL_TEST);
+                glStencilMask(0xFFu);
+                glStencilFunc(GL_ALWAYS, 0, 0xFFu);
+                glStencilOp(GL_KEEP, GL_KEEP, GL_ZERO);
+                glDrawArrays(GL_TRIANGLES, 0, 3);
+                glStencilMask(0u);
+                glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+            }
             culled_pass(light_pass_, block_queries_);
             workDeferredPairs(culled_pass, masks, lut_table, frame);
         }
