@@ -593,6 +593,164 @@ TEST_CASE("SoftSkips::empty_blocks: the occupancy stencil changes no bit and no 
     CHECK(on.pairs_front == off.pairs_front);
 }
 
+TEST_CASE("SoftSkips::closed_casters: the second pass's predicates (count_work off) change no bit, needed or not") {
+    penumbra::test::context();
+    // With count_work off, the closed casters' second pass draws list block b only when an
+    // occlusion query finds a texel whose block b holds a sample flagged near a kept closed
+    // triangle. G-buffer positions (on the surfaces, up to rounding) with a wide coplanar reach
+    // flag many samples; depth-reconstructed ones at the oracle's default flag none, and then
+    // the pass draws nothing. Masks against count_work on (the pass drawn whole) and against
+    // closed_casters off.
+    for (const bool surface : {true, false}) {
+        CAPTURE(surface);
+        const penumbra::test::GlWorld w(penumbra::scene::builtin("torus_knot"));
+        const penumbra::test::GlSoftLight soft(w, 64, 128, 128);
+        const penumbra::BufferRange table = soft.table();
+        const auto run = [&](bool count_work, bool closed, penumbra::SampleBasedSoftFrame* frame) {
+            penumbra::SampleBasedSoftGpuOptions options;
+            options.grid_width = options.grid_height = 128;
+            options.list_block = 4;  // several list blocks
+            options.count_work = count_work;
+            options.skips.closed_casters = closed;
+            if (surface) options.oracle.coplanar_epsilon = 1e-5;
+            penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+            pipeline.reserve(w.samples());
+            const auto draw = [&](penumbra::CasterClass c) { w.drawClass(c); };
+            if (surface) {
+                pipeline.validate(w.bufferInput(), w.samples(), table);
+                REQUIRE(pipeline.run(w.bufferInput(), w.samples(), table, draw) == Status::Ok);
+            } else {
+                pipeline.validate(w.depthInput(), table);
+                REQUIRE(pipeline.run(w.depthInput(), table, draw) == Status::Ok);
+            }
+            *frame = pipeline.readFrame();
+            penumbra::gl::checkErrors("closed casters' predicates");
+            return pipeline.readMasks();
+        };
+        penumbra::SampleBasedSoftFrame counted, quiet, open;
+        const std::vector<uint32_t> counted_masks = run(true, true, &counted);
+        const std::vector<uint32_t> quiet_masks = run(false, true, &quiet);
+        const std::vector<uint32_t> open_masks = run(true, false, &open);
+        MESSAGE(std::string(surface ? "G-buffer positions" : "depth input"), ": passes ", counted.passes, ", triangles culled ",
+                counted.triangles_culled, ", pairs recovered ", counted.pairs_recovered);
+        CHECK(counted.passes > 1);
+        CHECK(counted.triangles_culled > 0);
+        if (surface) {
+            CHECK(counted.pairs_recovered > 0);
+        } else {
+            CHECK(counted.pairs_recovered == 0);
+        }
+        CHECK(std::count_if(counted_masks.begin(), counted_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
+        CHECK(quiet_masks == counted_masks);
+        CHECK(open_masks == counted_masks);
+    }
+}
+
+TEST_CASE("SoftSkips::closed_casters: a culled face's bits through the second pass, count_work off too") {
+    penumbra::test::context();
+    // The CPU twin's tall-box case (sample_based_soft_test.cpp, skipsCoplanarReachCases): receivers
+    // just below a closed box's bottom edge, within the coplanar reach of the light-facing side x = 0
+    // (its far vertices make the reach large). The oracle ignores that side and counts the bottom
+    // face the segment enters through, which faces away from the light: culled in the first pass,
+    // these bits come only from the second. The second pass's predicates must let it through.
+    penumbra::scene::Mesh box;
+    const glm::vec3 lo(-1.0f, 0.0f, 0.0f), hi(0.0f, 1.0f, 10.0f), centre = 0.5f * (lo + hi);
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            glm::vec3 corner[4];
+            for (int k = 0; k < 4; ++k) {
+                corner[k][axis] = side ? hi[axis] : lo[axis];
+                corner[k][u] = (k == 1 || k == 2) ? hi[u] : lo[u];
+                corner[k][v] = (k >= 2) ? hi[v] : lo[v];
+            }
+            const glm::vec3 n = glm::cross(corner[1] - corner[0], corner[2] - corner[0]);
+            const bool flip = glm::dot(n, corner[0] - centre) < 0.0f;  // outward: (v1 - v0) x (v2 - v0)
+            const uint32_t base = uint32_t(box.positions.size());
+            box.positions.insert(box.positions.end(), corner, corner + 4);
+            const uint32_t quad[6] = {0, 1, 2, 0, 2, 3};
+            for (int k = 0; k < 6; k += 3)
+                for (int j = 0; j < 3; ++j) box.indices.push_back(base + quad[k + (flip ? 2 - j : j)]);
+        }
+    const GpuMesh gpu_box(box);
+    const std::vector<glm::vec3> points = {{-3e-9f, 0.5f, -3e-9f}, {-5e-9f, 0.5f, -5e-9f}, {-6e-9f, 0.25f, -5e-9f}};
+    const uint32_t n = 64;
+    penumbra::Light light;
+    light.center = dvec3(0.3, 0.5, 0.6);
+    light.size = dvec3(0.05);
+    penumbra::LightSampleOptions sample_options;
+    sample_options.count = n;
+    sample_options.sets = 1;
+    sample_options.seed = 5;
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+    penumbra::LightLutOptions lut_options;
+    lut_options.resolution = 32;
+    lut_options.certified = true;
+    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
+    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
+    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    // The light grid over the receivers (the casters need not lie inside its frustum).
+    glm::vec3 r_lo(1e30f), r_hi(-1e30f);
+    for (const auto& p : points) r_lo = glm::min(r_lo, p - 0.01f), r_hi = glm::max(r_hi, p + 0.01f);
+    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(glm::vec3(light.center), 1.0f), r_lo, r_hi);
+    double far_depth = 0.0;
+    for (const auto& p : points) far_depth = std::max(far_depth, double((vp * glm::vec4(p, 1.0f)).w));
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = 16;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
+    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    std::vector<glm::vec4> positions4;
+    for (const auto& p : points) positions4.emplace_back(p, 1.0f);
+    const penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(positions4);
+    const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
+    const uint32_t count = uint32_t(points.size());
+
+    std::vector<dvec3> receivers(points.begin(), points.end());
+    std::vector<dvec3> box_d(box.positions.begin(), box.positions.end());
+    const penumbra::reference::VisibilityOracle oracle(box_d, box.indices);
+    const penumbra::reference::VisibilityResult truth =
+        oracle.evaluate(receivers, std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + n));
+    for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Brute}) {
+        for (const bool count_work : {true, false}) {
+            CAPTURE(std::string(penumbra::softModeName(mode)));
+            CAPTURE(count_work);
+            penumbra::SampleBasedSoftGpuOptions options;
+            options.mode = mode;
+            options.grid_width = options.grid_height = 16;
+            options.count_work = count_work;
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            penumbra::SampleBasedSoftShadows pipeline(options, sets, brute ? nullptr : &lut, influence, vp);
+            pipeline.reserve(count);
+            const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : lut_table;
+            pipeline.validate(input, count, table);
+            REQUIRE(pipeline.run(input, count, table, [&](penumbra::CasterClass c) {
+                if (c == penumbra::CasterClass::Closed) gpu_box.draw();
+            }) == Status::Ok);
+            const std::vector<uint32_t> masks = pipeline.readMasks();
+            const std::vector<float> visibility = pipeline.readVisibility();
+            const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+            penumbra::gl::checkErrors("culled face");
+            const Tally t = compareOracle(masks, (n + 31) / 32, visibility, truth);
+            uint64_t blocked = 0, gpu_blocked = 0;
+            for (size_t r = 0; r < count; ++r) {
+                blocked += truth.blockedCount(r);
+                for (uint32_t s = 0; s < n; ++s) gpu_blocked += bitOf(masks, (n + 31) / 32, r, s);
+            }
+            MESSAGE(std::string(penumbra::softModeName(mode)), ", count_work ", count_work, ": ", blocked, " blocked bits (oracle), ",
+                    gpu_blocked, " (GPU), mismatched ", t.mismatched, ", ties ", t.ties, "; triangles culled ", f.triangles_culled,
+                    ", pairs recovered ", f.pairs_recovered);
+            CHECK(blocked > 0);
+            CHECK(gpu_blocked > 0);  // the bottom face's: lost if the second pass were skipped
+            CHECK(t.untested == 0);
+            CHECK(t.mismatched == 0);
+            if (count_work) {
+                CHECK(f.triangles_culled > 0);
+                CHECK(f.pairs_recovered > 0);
+            }
+        }
+    }
+}
+
 TEST_CASE("SoftSkips::silhouettes: one test from the light centre outside every silhouette's region, in every mode") {
     penumbra::test::context();
     // A small light and a fine grid: most pairs lie outside every potential silhouette's region

@@ -69,7 +69,9 @@
 //             per block, true only then) draws the same blocks again with the fragment-stage
 //             program; with skips.closed_casters then once more per block with Closed (the culled
 //             triangles, for the receivers that need them; with skips.empty_blocks a full-screen
-//             triangle first zeroes the stencil on the texels without such a receiver) and (3b)
+//             triangle first zeroes the stencil on the texels without such a receiver, and unless
+//             count_work one full-screen triangle per block inside an occlusion query finds whether
+//             the block holds one at all: the blocks that hold none are not drawn) and (3b)
 //             again, (4) resolve. Nothing
 //             is read back, queried, allocated or thrown: misuse returns a Status.
 //
@@ -312,12 +314,19 @@ public:
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
                                    defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
+        const auto occupancy_program = [&](uint32_t kind) {
+            ShaderDefines d = defines;
+            d.push_back({"PENUMBRA_SBS_OCCUPANCY", std::to_string(kind)});
+            return gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/occupancy.frag.glsl"}, d,
+                                    library);
+        };
+        if (options_.skips.closed_casters && !options_.count_work) {
+            near_blocks_ = occupancy_program(2);
+            for (uint32_t q = 0; q < options_.max_list_blocks; ++q) near_queries_.push_back(gl::OcclusionQuery::create());
+        }
         if (options_.skips.empty_blocks) {
-            occupancy_ = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/occupancy.frag.glsl"},
-                                          defines, library);
-            if (options_.skips.closed_casters)
-                near_stencil_ = gl::buildProgram(
-                    {"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/near_stencil.frag.glsl"}, defines, library);
+            occupancy_ = occupancy_program(0);
+            if (options_.skips.closed_casters) near_stencil_ = occupancy_program(1);
             stencil_ = gl::Renderbuffer::create();
             glNamedRenderbufferStorage(stencil_.id(), GL_STENCIL_INDEX8, static_cast<GLsizei>(options_.grid_width),
                                        static_cast<GLsizei>(options_.grid_height));
@@ -495,7 +504,7 @@ private:
     InfluenceRegionSetup influence_;
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
-    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_;
+    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_, near_blocks_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
     gl::Program light_compute_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
@@ -515,6 +524,9 @@ private:
     gl::Framebuffer framebuffer_;
     gl::VertexArray empty_vao_;
     std::vector<gl::OcclusionQuery> block_queries_;
+    /// SoftSkips::closed_casters, count_work off: per list block, the closed casters' second pass is
+    /// needed (some texel's block holds a sample flagged near a kept closed triangle).
+    std::vector<gl::OcclusionQuery> near_queries_;
     std::vector<gl::GpuTimer> timers_;  // options.timings: lists, light pass, resolve
     std::vector<uint8_t> params_staging_;
     uint32_t ubo_alignment_ = 256, ssbo_alignment_ = 256, param_stride_ = 512;
@@ -773,7 +785,22 @@ private:
                 glStencilMask(0u);
                 glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
             }
-            culled_pass(light_pass_, block_queries_);
+            // Its predicates (count_work draws it whole, counting its fragments): list block b holds
+            // a flagged sample somewhere. Usually none does, and the pass draws nothing.
+            if (!options_.count_work) {
+                glDisable(GL_STENCIL_TEST);
+                near_blocks_.use();
+                glBindVertexArray(empty_vao_.id());
+                for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                    glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                    glBeginQuery(GL_ANY_SAMPLES_PASSED, near_queries_[b].id());
+                    bindParams(1 + kSlotsPerBlock * b + 2);
+                    glDrawArrays(GL_TRIANGLES, 0, 3);
+                    glEndQuery(GL_ANY_SAMPLES_PASSED);
+                    glEndConditionalRender();
+                }
+            }
+            culled_pass(light_pass_, options_.count_work ? block_queries_ : near_queries_);
             workDeferredPairs(culled_pass, masks, lut_table, frame);
         }
         glDisable(GL_STENCIL_TEST);
