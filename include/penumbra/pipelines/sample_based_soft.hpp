@@ -144,6 +144,18 @@ struct SoftSkips {
     /// from the light (edges crossing it are clipped that far in front of it; the demo's plane lies
     /// 1 % beyond the farthest receiver). Counted: pairs_hard.
     bool silhouettes = false;
+    /// A (receiver p, caster T) pair is skipped before anything else when p lies beyond one of T's
+    /// wedge planes (detail::soft::wedgePlanes: the three planes through T's edges tangent to the
+    /// light's bounding sphere, and T's plane, each with T on one side and the whole light strictly
+    /// on the other) by more than 2 mu max(S, |p|_inf), mu = 4 max(tie, coplanar epsilon) + 2^-21,
+    /// S the largest coordinate of T and the light. Every point of a blocked segment lies on T's
+    /// side of each plane, so T blocks no light sample for p, and p and the segment stay farther
+    /// from T than any rule of the oracle reaches: not near a closed triangle, no tie. The GPU
+    /// builds the planes once per triangle in the geometry stage and tests them per view sample
+    /// in float in the fragment stage, so a rejected pair is never appended (deferred_pairs).
+    /// Most pairs a conservative influence region brings are such pairs (the light wholly in front
+    /// of one of the pair's planes: pairs_front). Counted: pairs_wedged.
+    bool wedges = true;
 };
 
 /// Value-initialised = defaults.
@@ -251,8 +263,10 @@ struct SampleBasedSoftCpuResult {
     uint64_t exact_tests = 0;       ///< per-sample oracle verdicts computed
     uint64_t triangles_culled = 0;  ///< SoftSkips::closed_casters: casters culled (each counted once)
     uint64_t pairs_cut = 0;         ///< SoftSkips::plane_cut: pairs skipped (not in `pairs`)
+    uint64_t pairs_wedged = 0;      ///< SoftSkips::wedges: pairs skipped first (in no other counter)
     /// SoftSkips::closed_casters: (receiver, culled caster) pairs evaluated after all, the receiver
-    /// lying within the oracle's coplanar reach of a kept closed triangle (then in pairs or pairs_cut).
+    /// lying within the oracle's coplanar reach of a kept closed triangle (then in pairs, pairs_cut or
+    /// pairs_wedged).
     uint64_t pairs_recovered = 0;
     /// Lut and Exact: pairs decided at once because the whole light lies in front of one of the
     /// pair's planes (a trivial LUT cell; in Exact a proven plane): T blocks nothing for the
@@ -355,6 +369,98 @@ inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double re
     return clearance > reach && (side > 0.0) == (c.light_side > 0.0);
 }
 
+/// SoftSkips::wedges: up to four planes F(x) = n . x + d per caster T (float n, d: what the
+/// light pass's fragment stage evaluates), each proven to have T's three vertices on its closed
+/// positive side and the light's bounding sphere strictly on its negative side. A blocked segment
+/// from p to a light point l meets T, so F(p) >= 0 on each (F is affine, F(l) < 0 <= F(t) and
+/// p = t + s (t - l), s >= 0). Per edge the plane through it tangent to the sphere grown by 4
+/// delta, shifted delta towards the light (T's side of the edge's dihedral wedge, sintorn2008
+/// §4.1's penumbra wedge); the fourth is T's own plane when the whole light lies on one side.
+/// (0, 0, 0, 1) where no plane is proven: it never rejects.
+struct WedgePlanes {
+    glm::vec4 planes[4];
+    float margin = 0.0f;  ///< 2 mu S (rounded up): the reject margin at receivers inside [-S, S]^3
+    float reach = 0.0f;   ///< S: the box [-S, S]^3 holds T's vertices and the light; receivers beyond 4 S are kept
+};
+
+/// The wedges' tolerance: 4 max(tie, coplanar epsilon) (the oracle's reach at a pair is at most
+/// that epsilon times twice the receiver's or the scene's largest coordinate) plus 2^-21 for the
+/// float planes' rounding.
+inline double wedgeMu(double eps) { return 4.0 * eps + 0x1.0p-21; }
+
+/// `plane` (float coefficients, evaluated exactly in double up to the bounded rounding) has every
+/// vertex on its closed positive side and the sphere (centre, reach) strictly on its negative side.
+inline bool wedgeProven(const glm::vec4& plane, const glm::dvec3 (&v)[3], const glm::dvec3& centre, double reach) {
+    const glm::dvec3 n(plane.x, plane.y, plane.z);
+    const double d = plane.w;
+    for (const glm::dvec3& x : v) {
+        // Float times float is exact in double: only the three additions round.
+        const double f = ((n.x * x.x + n.y * x.y) + n.z * x.z) + d;
+        const double size = std::fabs(n.x * x.x) + std::fabs(n.y * x.y) + std::fabs(n.z * x.z) + std::fabs(d);
+        if (!(f - 4.0 * kEpsilon * size >= 0.0)) return false;
+    }
+    const double f = ((n.x * centre.x + n.y * centre.y) + n.z * centre.z) + d;
+    const double size = std::fabs(n.x * centre.x) + std::fabs(n.y * centre.y) + std::fabs(n.z * centre.z) + std::fabs(d);
+    const double length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z) * (1.0 + 8.0 * kEpsilon);
+    return f + reach * length * (1.0 + 8.0 * kEpsilon) + 8.0 * kEpsilon * size < 0.0;
+}
+
+inline WedgePlanes wedgePlanes(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, const glm::dvec3& centre,
+                               double reach, double eps) {
+    namespace oracle = detail::oracle;
+    const glm::dvec3 v[3] = {v0, v1, v2};
+    const double scene = std::max(std::max(maxAbs3(v0), maxAbs3(v1)), std::max(maxAbs3(v2), maxAbs3(centre) + reach));
+    const double mu = wedgeMu(eps), delta = 2.0 * mu * scene, grown = reach + 4.0 * delta;
+    WedgePlanes w;
+    for (glm::vec4& q : w.planes) q = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    w.margin = static_cast<float>(2.0 * mu * scene * 1.001);
+    w.reach = static_cast<float>(scene);
+    for (int e = 0; e < 3; ++e) {
+        const glm::dvec3 a = v[e], b = v[(e + 1) % 3], o = v[(e + 2) % 3];
+        glm::dvec3 u = b - a;
+        const double length = oracle::length3(u);
+        if (!(length > 0.0)) continue;
+        u = u / length;
+        // In the plane across the edge: the sphere's centre at distance D, the opposite vertex.
+        const glm::dvec3 ca = centre - a, oa = o - a;
+        const glm::dvec3 w_c = ca - oracle::dot3(ca, u) * u, w_o = oa - oracle::dot3(oa, u) * u;
+        const double distance = oracle::length3(w_c);
+        if (!(distance > grown * (1.0 + 1e-6))) continue;  // the edge's line meets the grown sphere
+        const glm::dvec3 across = w_c / distance, side = oracle::cross3(u, across);
+        const double alpha = -grown / distance, beta = std::sqrt(std::max(0.0, 1.0 - alpha * alpha));
+        const glm::dvec3 m = alpha * across + (oracle::dot3(side, w_o) < 0.0 ? -beta : beta) * side;
+        const glm::vec4 plane(static_cast<float>(m.x), static_cast<float>(m.y), static_cast<float>(m.z),
+                              static_cast<float>(delta - oracle::dot3(m, a)));
+        if (wedgeProven(plane, v, centre, reach)) w.planes[e] = plane;
+    }
+    glm::dvec3 normal = oracle::cross3(v1 - v0, v2 - v0);
+    const double length = oracle::length3(normal);
+    if (length > 0.0) {
+        normal = normal / length;
+        if (oracle::dot3(normal, centre - v0) > 0.0) normal = -normal;
+        const glm::vec4 plane(static_cast<float>(normal.x), static_cast<float>(normal.y), static_cast<float>(normal.z),
+                              static_cast<float>(delta - oracle::dot3(normal, v0)));
+        if (wedgeProven(plane, v, centre, reach)) w.planes[3] = plane;
+    }
+    return w;
+}
+
+/// The float test of light_pass.frag.glsl (the same operations): p lies farther than the margin
+/// on the negative side of one of the planes, so T blocks no light point for p and the oracle's
+/// rules cannot reach it (its distance to T's planes exceeds 2 mu max(S, |p|_inf)); receivers
+/// beyond 4 S are kept. `mu2` = float(2 mu * 1.001).
+inline bool wedgeRejects(const WedgePlanes& w, const glm::vec3& p, float mu2) {
+    const float size = std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z)));
+    if (!(size <= 4.0f * w.reach)) return false;
+    const float margin = std::max(w.margin, mu2 * size);
+    for (const glm::vec4& q : w.planes) {
+        const float f = ((q.x * p.x + q.y * p.y) + q.z * p.z) + q.w;
+        const float e = ((std::fabs(q.x * p.x) + std::fabs(q.y * p.y)) + std::fabs(q.z * p.z)) + std::fabs(q.w);
+        if (f < -(margin + 1e-6f * e)) return true;
+    }
+    return false;
+}
+
 }  // namespace detail::soft
 
 /// CPU twin of the sample-based soft-shadow pipeline's per-sample work (see the header comment).
@@ -448,6 +554,15 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         }
     }
 
+    // SoftSkips::wedges: each caster's planes (the geometry stage's).
+    const bool wedges = options.skips.wedges;
+    std::vector<soft::WedgePlanes> wedge(wedges ? casters.triangle_count : 0);
+    for (size_t t = 0; t < wedge.size(); ++t)
+        wedge[t] = soft::wedgePlanes(glm::dvec3(casters.positions[casters.indices[3 * t]]),
+                                     glm::dvec3(casters.positions[casters.indices[3 * t + 1]]),
+                                     glm::dvec3(casters.positions[casters.indices[3 * t + 2]]), frame.center, light_reach, eps);
+    const float wedge_mu2 = static_cast<float>(2.0 * soft::wedgeMu(eps) * 1.001);
+
     for (size_t r = 0; r < receivers.count; ++r) {
         const glm::dvec3 p(receivers.positions[r]);
         const uint32_t word = receivers.sets ? receivers.sets[r] : 0u;
@@ -473,6 +588,10 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             const glm::dvec3 v2(casters.positions[casters.indices[3 * t + 2]]);
             if (detail::degenerateTriangle(v0, v1, v2)) continue;
             if (sweep == 1) ++result.pairs_recovered;
+            if (wedges && soft::wedgeRejects(wedge[t], receivers.positions[r], wedge_mu2)) {
+                ++result.pairs_wedged;  // (farther from T than the closed casters' near reach, too)
+                continue;
+            }
             // The oracle's scale (rule 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
             const double scale_v = std::max(soft::maxAbs3(v0 - p), std::max(soft::maxAbs3(v1 - p), soft::maxAbs3(v2 - p)));
             const double scale_lo = std::max(scale_v, s_min), scale_hi = std::max(scale_v, s_max);
