@@ -970,6 +970,71 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
     }
 }
 
+TEST_CASE("SoftSkips::wedges: no bit of exact or brute changes, in every tier of the light pass") {
+    penumbra::test::context();
+    // The geometry stage's wedge planes, tested per view sample by the deferring fragment stage
+    // (pairs never appended), by the per-fragment compute pass (fragments past the pairs buffer)
+    // and by the fragment-stage program (deferral off): the same bits as wedges off, the same
+    // counters in every tier, and every pair accounted for.
+    for (const std::string name : {"columns", "torus_knot"}) {
+        const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
+        const penumbra::test::GlSoftLight soft(w, 64, 128, 128);
+        const penumbra::SampleDepthInput input = w.depthInput();
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Lut, penumbra::SoftMode::Brute}) {
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            if (brute && name != "columns") continue;
+            const std::string mode_name = penumbra::softModeName(mode);
+            const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : soft.table();
+            const auto run = [&](bool wedges, uint32_t pairs, penumbra::SampleBasedSoftFrame* frame) {
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 128;
+                options.list_block = 8;
+                options.skips.wedges = wedges;
+                options.deferred_pairs = pairs;
+                options.deferred_fragments = options.deferred_triangles = pairs > 0 ? 1u << 18 : 0u;
+                penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
+                                                          w.light.view_projection);
+                pipeline.reserve(w.samples());
+                pipeline.validate(input, table);
+                REQUIRE(pipeline.run(input, table, [&](penumbra::CasterClass c) { w.drawClass(c); }) == Status::Ok);
+                *frame = pipeline.readFrame();
+                penumbra::gl::checkErrors("wedges");
+                return pipeline.readMasks();
+            };
+            penumbra::SampleBasedSoftFrame off;
+            const std::vector<uint32_t> off_masks = run(false, 1u << 20, &off);
+            CHECK(off.pairs_wedged == 0);
+            penumbra::SampleBasedSoftFrame tiers[3];
+            std::vector<uint32_t> tier_masks[3];
+            const uint32_t capacities[3] = {1u << 20, 64u, 0u};  // pairs buffer; fragments buffer; fragment stage
+            for (int t = 0; t < 3; ++t) tier_masks[t] = run(true, capacities[t], &tiers[t]);
+            const penumbra::SampleBasedSoftFrame& on = tiers[0];
+            uint64_t lut_moved = 0;
+            for (size_t i = 0; i < off_masks.size(); ++i) lut_moved += uint64_t(__builtin_popcount(off_masks[i] ^ tier_masks[0][i]));
+            MESSAGE(name, " ", mode_name, ": pairs ", off.pairs, " + cut ", off.pairs_cut, " without wedges, ", on.pairs, " + cut ",
+                    on.pairs_cut, " + wedged ", on.pairs_wedged, " with; deferred pairs ", off.pairs_deferred, " -> ",
+                    on.pairs_deferred, "; bits moved ", lut_moved);
+            CHECK(on.pairs_wedged > 0);
+            CHECK(on.deferral_fallbacks == 0);
+            CHECK(tiers[1].deferral_fallbacks == 0);
+            CHECK(on.pairs + on.pairs_cut + on.pairs_wedged == off.pairs + off.pairs_cut);
+            CHECK(on.pairs_deferred + on.pairs_wedged <= off.pairs_deferred);
+            if (mode != penumbra::SoftMode::Lut) CHECK(tier_masks[0] == off_masks);
+            for (int t = 1; t < 3; ++t) {
+                CAPTURE(t);
+                CHECK(tier_masks[t] == tier_masks[0]);
+                CHECK(tiers[t].pairs == on.pairs);
+                CHECK(tiers[t].pairs_wedged == on.pairs_wedged);
+                CHECK(tiers[t].fragments == on.fragments);
+                CHECK(tiers[t].exact_tests == on.exact_tests);
+                CHECK(tiers[t].pairs_front == on.pairs_front);
+                if (t == 1) CHECK(tiers[t].pairs_deferred == on.pairs_deferred);
+            }
+        }
+    }
+}
+
 TEST_CASE("Deferred pairs: a pair's entry unpacks to its triangle slot, list-block index and texel at the options' limits") {
     penumbra::test::context();
     penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();

@@ -280,6 +280,10 @@ TEST_CASE("sample-based soft (CPU twin): depth-input epsilon, receivers in a tes
     penumbra::SampleBasedSoftOptions options;
     options.mode = penumbra::SoftMode::Exact;
     options.oracle.coplanar_epsilon = 2e-5;
+    // The proof under test comes after the skips: SoftSkips::wedges would take most of these pairs
+    // first (the floor's other triangles, seen across an edge plane); it is compared with this
+    // run at the end.
+    options.skips.wedges = false;
     const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(), mesh.triangleCount()};
     const penumbra::SoftReceivers receivers{points.data(), points.size(), nullptr};
     const penumbra::SampleBasedSoftCpuResult exact = penumbra::sampleBasedSoftCpu(sets, &lut, words.data(), casters, receivers, options);
@@ -304,6 +308,12 @@ TEST_CASE("sample-based soft (CPU twin): depth-input epsilon, receivers in a tes
     // within the coplanar reach.
     CHECK(exact.pairs_ignored >= 200 * 128);
     CHECK(exact.pairs_unproven < points.size() * 4);
+    options.skips.wedges = true;
+    const penumbra::SampleBasedSoftCpuResult wedged = penumbra::sampleBasedSoftCpu(sets, &lut, words.data(), casters, receivers, options);
+    MESSAGE("floor with wedges: pairs " << wedged.pairs << ", wedged " << wedged.pairs_wedged << ", ignored " << wedged.pairs_ignored);
+    CHECK(wedged.masks == exact.masks);
+    CHECK(wedged.pairs_wedged > 0);
+    CHECK(wedged.pairs + wedged.pairs_wedged == exact.pairs + exact.pairs_cut - wedged.pairs_cut);
 }
 
 TEST_CASE("sample-based soft: sampleBasedSoftLutTolerance") {

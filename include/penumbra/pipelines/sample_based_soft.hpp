@@ -401,7 +401,7 @@ inline bool wedgeProven(const glm::vec4& plane, const glm::dvec3 (&v)[3], const 
     }
     const double f = ((n.x * centre.x + n.y * centre.y) + n.z * centre.z) + d;
     const double size = std::fabs(n.x * centre.x) + std::fabs(n.y * centre.y) + std::fabs(n.z * centre.z) + std::fabs(d);
-    const double length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z) * (1.0 + 8.0 * kEpsilon);
+    const double length = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z) * (1.0 + 64.0 * kEpsilon);  // GPUs: sqrt within 2.5 ulp
     return f + reach * length * (1.0 + 8.0 * kEpsilon) + 8.0 * kEpsilon * size < 0.0;
 }
 
@@ -785,8 +785,8 @@ struct SampleBasedSoftGpuOptions {
     /// skip on (BM_SoftSkips: all_fragment against all).
     uint32_t deferred_pairs = 1u << 20;
     /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
-    /// that emits an influence region; 40 bytes each, at most 2^24). 0: deferred_pairs / 4 (10 MiB
-    /// by default).
+    /// that emits an influence region; 112 bytes each: the vertices, the draw, SoftSkips::wedges'
+    /// planes; at most 2^24). 0: deferred_pairs / 4 (28 MiB by default).
     uint32_t deferred_triangles = 0;
     /// Deferred pairs: fragments whose pairs do not fit the pairs buffer (8 bytes each). They are
     /// appended whole, (triangle slot, texel), and worked by the compute pass's per-fragment

@@ -20,6 +20,8 @@
 // penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
 // penumbra-permutation: PENUMBRA_SBS_PER_FRAGMENT=1
 // penumbra-permutation: PENUMBRA_SBS_PER_FRAGMENT=1 PENUMBRA_SBS_MODE=1 PENUMBRA_SBS_COUNT_WORK=0
+// penumbra-permutation: PENUMBRA_SBS_PER_FRAGMENT=1 PENUMBRA_SBS_WEDGES=1
+// penumbra-permutation: PENUMBRA_SBS_WEDGES=1
 #define PENUMBRA_SBS_STAGE 1  // tables to light_pass_tables.comp.glsl, exact tests to light_pass_tests.comp.glsl
 #include "penumbra/sample_based_soft/light_pass_work.glsl"
 
@@ -37,7 +39,7 @@ void main() {
     penumbraSbsFragmentPairs = 1u;
     const uvec2 range = penumbraSbsSlotWork(entry.x, uvec2(entry.y & 0xFFFFu, entry.y >> 16u), PENUMBRA_SBS_WHOLE_BLOCK);
 #if PENUMBRA_SBS_COUNT_WORK
-    atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED], range.y);
+    atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED], range.y - penumbraSbsWedged);
 #endif
 }
 #else
@@ -50,7 +52,7 @@ void main() {
     if (entry.y == PENUMBRA_SBS_PAIR_EMPTY) return;
     const PenumbraSbsPair pair = penumbraSbsUnpackPair(entry);
     penumbraSbsPairIndex = k;
-    penumbraSbsFragmentPairs = pair.index == 0u ? 1u : 0u;
+    penumbraSbsFragmentPairs = 0u;  // the fragment stage counted the fragment
     penumbraSbsSlotWork(pair.triangle, pair.texel, pair.index);
 }
 #endif

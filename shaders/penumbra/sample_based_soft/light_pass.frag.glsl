@@ -22,6 +22,8 @@
 // penumbra-permutation: PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_SILHOUETTES=1 PENUMBRA_SBS_CLOSED_CASTERS=1
 // penumbra-permutation: PENUMBRA_SBS_DEFERRED=1
 // penumbra-permutation: PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_MODE=1 PENUMBRA_SBS_COUNT_WORK=0
+// penumbra-permutation: PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_WEDGES=1
+// penumbra-permutation: PENUMBRA_SBS_WEDGES=1
 #include "penumbra/sample_based_soft/light_pass_work.glsl"
 
 #ifndef PENUMBRA_SBS_DEFERRED
@@ -47,6 +49,10 @@ layout(location = 1) flat in vec3 penumbraSbsVertex1;
 layout(location = 2) flat in vec3 penumbraSbsVertex2;
 #endif
 layout(location = 3) flat in uint penumbraSbsTriangle;  // deferred pairs: the triangle's slot, or PENUMBRA_SBS_NO_TRIANGLE
+#if PENUMBRA_SBS_WEDGES
+layout(location = 4) flat in vec4 penumbraSbsWedge[4];  // SoftSkips::wedges (wedges.glsl)
+layout(location = 8) flat in vec2 penumbraSbsWedgeMargin;
+#endif
 
 void main() {
     const PenumbraSbsParams P = penumbraSbsParams;
@@ -94,21 +100,49 @@ void main() {
     // in one invocation); the one that straddles the capacity leaves its share below it empty.
     // Once the buffer is full no fragment adds to its counter, which cannot wrap around then (at
     // most the fragments in flight add past the capacity, each at most a list block).
+    // SoftSkips::wedges: only the samples no wedge plane of T rejects get a pair (the rest are
+    // counted here, as is the fragment, when its pairs fit; the per-fragment pass counts both
+    // otherwise).
+#if PENUMBRA_SBS_WEDGES
+    const PenumbraSbsWedges wedges = PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin);
+    const float wedge_mu2 = float(2.0LF * penumbraSbsWedgeMu(P.epsilon.z) * 1.001LF);
+    uint kept = 0u;
+    for (uint i = 0u; i < range.y; ++i)
+        if (!penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(range.x + i), wedge_mu2)) ++kept;
+#else
+    const uint kept = range.y;
+#endif
     const uint capacity = uint(penumbraSbsPairs.length());
-    const uint first = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] >= capacity
+    const uint first = kept == 0u ? 0u
+                       : penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] >= capacity
                            ? capacity
-                           : atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], range.y);
-    const bool fits = first < capacity && range.y <= capacity - first;
-    const uint end = fits ? first + range.y : max(first, capacity);
-    for (uint k = first; k < end; ++k)
-        penumbraSbsPairs[k] = fits ? uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, k - first), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, k - first))
-                                   : uvec2(0u, PENUMBRA_SBS_PAIR_EMPTY);
-    if (!fits) {
+                           : atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], kept);
+    const bool fits = kept == 0u || (first < capacity && kept <= capacity - first);
+    if (fits) {
+        uint k = first;
+        for (uint i = 0u; i < range.y && k < first + kept; ++i) {
+#if PENUMBRA_SBS_WEDGES
+            if (penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(range.x + i), wedge_mu2)) continue;
+#endif
+            penumbraSbsPairs[k++] = uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, i), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, i));
+        }
+#if PENUMBRA_SBS_COUNT_WORK
+        PENUMBRA_SBS_COUNT(PENUMBRA_SBS_WORK_FRAGMENTS);
+        if (kept < range.y)
+            atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + PENUMBRA_SBS_WORK_PAIRS_WEDGED], range.y - kept);
+#endif
+    } else {
+        for (uint k = first; k < capacity; ++k) penumbraSbsPairs[k] = uvec2(0u, PENUMBRA_SBS_PAIR_EMPTY);
         if (first < capacity) penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY] = capacity - first;
         const uint f = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS], 1u);
         if (f < uint(penumbraSbsFragments.length())) penumbraSbsFragments[f] = uvec2(penumbraSbsTriangle, texel.x | texel.y << 16u);
     }
 #else
-    penumbraSbsTexelWork(P, texel, range, dvec3(penumbraSbsVertex0), dvec3(penumbraSbsVertex1), dvec3(penumbraSbsVertex2));
+#if PENUMBRA_SBS_WEDGES
+    const PenumbraSbsWedges wedges = PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin);
+#else
+    const PenumbraSbsWedges wedges = penumbraSbsNoWedges();
+#endif
+    penumbraSbsTexelWork(P, texel, range, dvec3(penumbraSbsVertex0), dvec3(penumbraSbsVertex1), dvec3(penumbraSbsVertex2), wedges);
 #endif
 }

@@ -11,6 +11,10 @@
 // with no slot left it passes PENUMBRA_SBS_NO_TRIANGLE, and its fragments flag the draws as
 // overflowed (count_work's complement draw takes no slot: its fragments all return at once). Its
 // culled-triangle count waits in the deferral buffer as the fragment stage's counters do.
+// PENUMBRA_SBS_WEDGES (SoftSkips::wedges): the triangle's wedge planes (wedges.glsl) travel flat to
+// the fragment stage, and into its slot.
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_WEDGES=1
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_WEDGES=1
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_DEFERRED=1
@@ -18,6 +22,7 @@
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 #include "penumbra/alias_free_hard/degenerate.glsl"
 #include "penumbra/sample_based_soft/caster_plane.glsl"
+#include "penumbra/sample_based_soft/wedges.glsl"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
 #define PENUMBRA_SBS_COUNT_WORK 1
@@ -28,6 +33,9 @@
 #endif
 #ifndef PENUMBRA_SBS_DEFERRED
 #define PENUMBRA_SBS_DEFERRED 0
+#endif
+#ifndef PENUMBRA_SBS_WEDGES
+#define PENUMBRA_SBS_WEDGES 0
 #endif
 
 layout(triangles) in;
@@ -57,6 +65,10 @@ layout(location = 1) flat out vec3 penumbraSbsVertex1;
 layout(location = 2) flat out vec3 penumbraSbsVertex2;
 #endif
 layout(location = 3) flat out uint penumbraSbsTriangle;
+#if PENUMBRA_SBS_WEDGES
+layout(location = 4) flat out vec4 penumbraSbsWedge[4];  // SoftSkips::wedges (wedges.glsl)
+layout(location = 8) flat out vec2 penumbraSbsWedgeMargin;
+#endif
 
 void main() {
     const vec3 v0 = gl_in[0].gl_Position.xyz, v1 = gl_in[1].gl_Position.xyz, v2 = gl_in[2].gl_Position.xyz;
@@ -84,8 +96,13 @@ void main() {
         }
     }
     const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
+    if (count <= 0) return;
     const vec2 half_grid = 0.5 * penumbraSbsInfluence.grid.xy;
     uint slot = PENUMBRA_SBS_NO_TRIANGLE;
+#if PENUMBRA_SBS_WEDGES
+    const PenumbraSbsWedges wedges = penumbraSbsWedgePlanes(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz,
+                                                            penumbraSbsParams.bounds.x, penumbraSbsParams.epsilon.z);
+#endif
 #if PENUMBRA_SBS_DEFERRED
     if (count > 0 && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
         const uint k = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES], 1u);
@@ -97,6 +114,11 @@ void main() {
             const vec3 v[3] = vec3[3](v0, v1, v2);
             for (uint i = 0u; i < 9u; ++i) penumbraSbsTriangles[base + i] = floatBitsToUint(v[i / 3u][i % 3u]);
             penumbraSbsTriangles[base + 9u] = penumbraSbsParams.grid.w | penumbraSbsParams.reserved.y << 16u;
+#if PENUMBRA_SBS_WEDGES
+            for (uint i = 0u; i < 16u; ++i) penumbraSbsTriangles[base + 10u + i] = floatBitsToUint(wedges.planes[i / 4u][i % 4u]);
+            penumbraSbsTriangles[base + 26u] = floatBitsToUint(wedges.margin.x);
+            penumbraSbsTriangles[base + 27u] = floatBitsToUint(wedges.margin.y);
+#endif
         }
     }
 #endif
@@ -110,6 +132,10 @@ void main() {
         penumbraSbsVertex2 = v2;
 #endif
         penumbraSbsTriangle = slot;
+#if PENUMBRA_SBS_WEDGES
+        penumbraSbsWedge = wedges.planes;
+        penumbraSbsWedgeMargin = wedges.margin;
+#endif
         EmitVertex();
     }
     EndPrimitive();

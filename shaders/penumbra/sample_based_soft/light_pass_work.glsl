@@ -83,8 +83,8 @@ layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSb
 uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (the compute passes set it)
 #endif
 #if PENUMBRA_SBS_STAGE == 1
-// Set by the compute pass: 1 when its pair is the first sample of its fragment's list block (the
-// fragment is counted with it; always, a fragment per invocation).
+// Set by the compute pass: 1 in the per-fragment program (the fragment is counted with its block),
+// 0 in the pairs' (the fragment stage counted the fragment when it appended its pairs).
 uint penumbraSbsFragmentPairs;
 #endif
 #if PENUMBRA_SBS_TABLES_HANDED_ON
@@ -112,6 +112,17 @@ layout(std430, binding = PENUMBRA_SBS_TABLE_PAIRS_BINDING) writeonly buffer Penu
 #include "penumbra/alias_free_hard/blocker_test.glsl"
 
 #include "penumbra/sample_based_soft/caster_plane.glsl"
+#include "penumbra/sample_based_soft/wedges.glsl"
+#ifndef PENUMBRA_SBS_WEDGES
+#define PENUMBRA_SBS_WEDGES 0
+#endif
+// SoftSkips::wedges: the pairs the last penumbraSbsTexelWork skipped by T's wedge planes.
+uint penumbraSbsWedged;
+// Planes that never reject (the pairs' passes: their pairs were tested in the fragment stage).
+PenumbraSbsWedges penumbraSbsNoWedges() {
+    const vec4 none = vec4(0.0, 0.0, 0.0, 1.0);
+    return PenumbraSbsWedges(vec4[4](none, none, none, none), vec2(0.0));
+}
 
 // LightFrame::planeToLocal: world plane dot(n, x) + w = 0 -> unit local normal and offset (the
 // signed distance of the light centre in normalised units). Zero normal -> 0 (nothing behind).
@@ -179,7 +190,7 @@ void penumbraSbsOrTable(uint base, uint left, uvec4 m) {
 /// draw's parameter block (the compute pass of deferred pairs restores its block index and flags,
 /// the only fields in which the draws' blocks differ).
 void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uvec2 range, const dvec3 v0, const dvec3 v1,
-                          const dvec3 v2) {
+                          const dvec3 v2, const PenumbraSbsWedges wedges) {
     const uint mode = uint(PENUMBRA_SBS_MODE), n = P.config.y, words = P.config.w, tables = P.counts.z;
     const bool exact = mode == PENUMBRA_SBS_MODE_EXACT;
     // SoftSkips::plane_cut: T's plane against the light, once per fragment.
@@ -209,13 +220,23 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     double normal_length = -1.0LF;
     precise double light_gap = 0.0LF;
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u,
-         hard = 0u, recovered = 0u, front = 0u;
+         hard = 0u, recovered = 0u, front = 0u, wedged = 0u;
+#if PENUMBRA_SBS_WEDGES
+    const float wedge_mu2 = float(2.0LF * penumbraSbsWedgeMu(P.epsilon.z) * 1.001LF);
+#endif
     // SoftSkips::closed_casters (the twin's two sweeps): the first pass over a closed draw flags the
     // samples within the oracle's coplanar reach of a kept triangle and not provably outside it (and
     // their texel, after the samples' flags); the second pass gives only those the culled triangles.
     const bool culled_pass = (P.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u;
     const uint texel_flag = P.counts.x + texel.y * P.grid.x + texel.x;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
+#if PENUMBRA_SBS_WEDGES
+        // SoftSkips::wedges, first (a rejected sample is not near T either: see SoftSkips).
+        if (penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(slot).xyz, wedge_mu2)) {
+            ++wedged;
+            continue;
+        }
+#endif
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const uint id = penumbraSampleListsId(slot);
         const uvec2 selection = penumbraSbsSelection(P, id);
@@ -436,7 +457,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
 #if PENUMBRA_SBS_STAGE == 2
     // The tables pass counts what it adds: uncertain bits, unproven planes, exact tests. The pair's
     // compute pass counted the fragment and the pair (it ran the same steps up to the tables).
-    pairs = ignored = unproven_pairs = cut = hard = recovered = front = 0u;
+    pairs = ignored = unproven_pairs = cut = hard = recovered = front = wedged = 0u;
 #elif PENUMBRA_SBS_STAGE == 1
     // The pairs' compute pass works one sample of a fragment's block per invocation: the fragment
     // is counted with its first.
@@ -454,6 +475,8 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     if (hard != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_HARD], hard);
     if (recovered != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_RECOVERED], recovered);
     if (front != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_FRONT], front);
+    if (wedged != 0u) atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_PAIRS_WEDGED], wedged);
 #endif
+    penumbraSbsWedged = wedged;
 }
 #endif

@@ -125,7 +125,8 @@
 #define PENUMBRA_SBS_WORK_PAIRS_FRONT 13       // pairs with the whole light in front of one (proven) plane: no table read
 #define PENUMBRA_SBS_WORK_DEFERRED 14          // deferred pairs: (triangle, view sample) pairs the compute pass worked
 #define PENUMBRA_SBS_WORK_FALLBACKS 15         // deferred pairs: draws redrawn by the fragment stage (overflow)
-#define PENUMBRA_SBS_WORK_WORDS 16
+#define PENUMBRA_SBS_WORK_PAIRS_WEDGED 16      // pairs whose view sample lies beyond one of T's wedge planes
+#define PENUMBRA_SBS_WORK_WORDS 17
 
 // The deferral buffer's words (PENUMBRA_SBS_DEFERRAL_BINDING).
 #define PENUMBRA_SBS_DEFERRAL_PAIRS 0        // pairs appended since the last dispatch (may exceed the capacity)
@@ -134,21 +135,22 @@
 #define PENUMBRA_SBS_DEFERRAL_OVERFLOW 3     // set by a fragment whose triangle got no slot
 #define PENUMBRA_SBS_DEFERRAL_ARGS 4         // 3 words: glDispatchComputeIndirect's group counts
 #define PENUMBRA_SBS_DEFERRAL_FALLBACK 7     // the last draws overflowed: the fragment stage redraws them
-#define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws
-#define PENUMBRA_SBS_DEFERRAL_TESTS 24       // exact-test words appended by the compute pass (may exceed the capacity)
-#define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 25  // words the exact-test pass reads
-#define PENUMBRA_SBS_DEFERRAL_SAMPLES 26     // pairs handed to the tables pass (at most the pairs dispatched)
-#define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 27  // pairs the tables pass reads
-#define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 28   // 3 words: the exact-test pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS 32  // 3 words: the tables pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS 35   // fragments appended to the fragments buffer (may exceed the capacity)
-#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED 36  // fragments the per-fragment pass reads
-#define PENUMBRA_SBS_DEFERRAL_EMPTY 37       // empty pairs below the capacity (the one fragment that straddled it)
-#define PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS 40  // 3 words: the per-fragment pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 44
+#define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws (to 27)
+#define PENUMBRA_SBS_DEFERRAL_TESTS 28       // exact-test words appended by the compute pass (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 29  // words the exact-test pass reads
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES 30     // pairs handed to the tables pass (at most the pairs dispatched)
+#define PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED 31  // pairs the tables pass reads
+#define PENUMBRA_SBS_DEFERRAL_TEST_ARGS 32   // 3 words: the exact-test pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS 36  // 3 words: the tables pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS 39   // fragments appended to the fragments buffer (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED 40  // fragments the per-fragment pass reads
+#define PENUMBRA_SBS_DEFERRAL_EMPTY 41       // empty pairs below the capacity (the one fragment that straddled it)
+#define PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS 44  // 3 words: the per-fragment pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_WORDS 48
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
-#define PENUMBRA_SBS_TRIANGLE_WORDS 10u      // a slot: 9 float bits (world vertices), list block | flags << 16
+#define PENUMBRA_SBS_TRIANGLE_WORDS 28u      // a slot: 9 float bits (world vertices), list block | flags << 16,
+                                             // with SoftSkips::wedges its 4 planes and 2 margins (wedges.glsl)
 // A deferred pair (pairs buffer, PENUMBRA_SBS_PAIRS_BINDING): one per (triangle slot, view sample of
 // the fragment's list block), the sample as its index in the block: x = slot | (index & 0xFF) << 24,
 // y = texel x | texel y << 13 | (index >> 8) << 26 (slots < 2^24, grid sides <= 8192, list blocks

@@ -35,17 +35,35 @@ PenumbraSbsParams penumbraSbsSlotParams(uint slot) {
 }
 
 #if defined(PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL) && PENUMBRA_SBS_STAGE != 0  // the pairs and tables passes
+/// The wedge planes the geometry stage stored in slot `slot` (SoftSkips::wedges).
+PenumbraSbsWedges penumbraSbsSlotWedges(uint slot) {
+    const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * slot + 10u;
+    PenumbraSbsWedges w;
+    for (uint i = 0u; i < 4u; ++i)
+        w.planes[i] = uintBitsToFloat(uvec4(penumbraSbsTriangles[base + 4u * i], penumbraSbsTriangles[base + 4u * i + 1u],
+                                            penumbraSbsTriangles[base + 4u * i + 2u], penumbraSbsTriangles[base + 4u * i + 3u]));
+    w.margin = uintBitsToFloat(uvec2(penumbraSbsTriangles[base + 16u], penumbraSbsTriangles[base + 17u]));
+    return w;
+}
+
 /// The compute passes' work (light_pass_work.glsl's penumbraSbsTexelWork) of slot `slot`'s triangle
 /// on `texel`'s list block of the slot's draw: the whole block, or only its sample `index`
-/// (PENUMBRA_SBS_WHOLE_BLOCK: all). Returns the range of list slots worked.
+/// (PENUMBRA_SBS_WHOLE_BLOCK: all; the wedge planes tested there, a single sample's pair passed
+/// them in the fragment stage). Returns the range of list slots walked (penumbraSbsWedged of them
+/// skipped by the wedges).
 #define PENUMBRA_SBS_WHOLE_BLOCK 0xFFFFFFFFu
 uvec2 penumbraSbsSlotWork(uint slot, uvec2 texel, uint index) {
     const PenumbraSbsParams P = penumbraSbsSlotParams(slot);
     penumbraSbsTestTriangle = slot;
     uvec2 range = penumbraSampleListsBlock(ivec2(texel), P.grid.w, P.grid.z);
     if (index != PENUMBRA_SBS_WHOLE_BLOCK) range = uvec2(range.x + index, 1u);
+#if PENUMBRA_SBS_WEDGES
+    const PenumbraSbsWedges wedges = index == PENUMBRA_SBS_WHOLE_BLOCK ? penumbraSbsSlotWedges(slot) : penumbraSbsNoWedges();
+#else
+    const PenumbraSbsWedges wedges = penumbraSbsNoWedges();
+#endif
     penumbraSbsTexelWork(P, texel, range, penumbraSbsSlotVertex(slot, 0u), penumbraSbsSlotVertex(slot, 1u),
-                         penumbraSbsSlotVertex(slot, 2u));
+                         penumbraSbsSlotVertex(slot, 2u), wedges);
     return range;
 }
 #endif

@@ -160,9 +160,13 @@ struct SampleBasedSoftFrame {
     /// Pairs decided at once because the whole light lies in front of one (in Exact: proven) plane
     /// of the pair: no LUT table read (Lut and Exact).
     uint64_t pairs_front = 0;
+    /// SoftSkips::wedges: (triangle, view sample) pairs skipped by the triangle's wedge planes, in no
+    /// other counter (with deferred pairs never appended; nor counted in pairs_recovered).
+    uint64_t pairs_wedged = 0;
     /// Deferred pairs (options.deferred_pairs): (caster triangle, view sample) pairs the compute pass
     /// worked: when no draw overflowed, one per view sample in the list block of every fragment but
-    /// those skipped (with SoftSkips::empty_blocks off, empty blocks' fragments append none). They
+    /// those skipped (with SoftSkips::empty_blocks off, empty blocks' fragments append none) and
+    /// the view samples SoftSkips::wedges rejects. They
     /// include the pairs that end before `pairs` counts them (cut, not flagged near).
     uint64_t pairs_deferred = 0;
     /// Deferred pairs: passes (the first, the closed casters' second) that overflowed the pairs
@@ -216,6 +220,7 @@ public:
         defines.push_back({"PENUMBRA_SBS_MODE", std::to_string(static_cast<uint32_t>(options_.mode))});
         defines.push_back({"PENUMBRA_SBS_SILHOUETTES", options_.skips.silhouettes ? "1" : "0"});
         defines.push_back({"PENUMBRA_SBS_CLOSED_CASTERS", options_.skips.closed_casters ? "1" : "0"});
+        defines.push_back({"PENUMBRA_SBS_WEDGES", options_.skips.wedges ? "1" : "0"});
         const SbsBindings& b = bindings_;
         const std::pair<const char*, uint32_t> binding_defines[] = {
             {"PENUMBRA_SBS_PARAMS_BINDING", b.params},       {"PENUMBRA_SBS_INFLUENCE_BINDING", b.influence},
@@ -462,6 +467,7 @@ public:
         f.pairs_hard = w[PENUMBRA_SBS_WORK_PAIRS_HARD];
         f.pairs_recovered = w[PENUMBRA_SBS_WORK_PAIRS_RECOVERED];
         f.pairs_front = w[PENUMBRA_SBS_WORK_PAIRS_FRONT];
+        f.pairs_wedged = w[PENUMBRA_SBS_WORK_PAIRS_WEDGED];
         f.pairs_deferred = w[PENUMBRA_SBS_WORK_DEFERRED];
         f.deferral_fallbacks = w[PENUMBRA_SBS_WORK_FALLBACKS];
         if (!timers_.empty()) {
