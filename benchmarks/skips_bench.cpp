@@ -18,6 +18,7 @@
 //     silhouette  SoftSkips::silhouettes: outside every potential silhouette edge's influence region
 //            one exact test from the light centre per pair (the casters' adjacency drawn by
 //            GpuScene::drawAdjacency)
+//     wedge  SoftSkips::wedges: view samples beyond one of a caster's wedge planes get no pair
 //   hard (penumbra/gl/pipelines/alias_free_hard.hpp, AliasFreeHardOptions):
 //     cull = light_facing_only, fit = fit_frustum, shadowed = skip_shadowed, box = clip_to_box,
 //     empty = skip_empty_texels (the occupancy stencil).
@@ -64,7 +65,7 @@
 //   compared_words         words compared per method
 //   soft work, from a separate untimed run per method with count_work = true:
 //     pairs_<m>, fragments_<m>, fragments_skipped_<m>, triangles_culled_<m>, pairs_cut_<m>, pairs_hard_<m>,
-//     pairs_recovered_<m>,
+//     pairs_recovered_<m>, pairs_wedged_<m>,
 //     exact_tests_<m>, passes_<m>, overflow_<m> (samples past the last list block: untested),
 //     pairs_deferred_<m> ((triangle, texel) pairs the compute pass worked)
 //   hard work, likewise: fragments_<m>, tests_<m>, triangles_emitted_<m>, passes_<m>, overflow_<m>
@@ -223,22 +224,23 @@ struct SoftMethod {
 
 std::vector<SoftMethod> softMethods() {
     penumbra::SoftSkips none;
-    none.empty_blocks = none.closed_casters = none.plane_cut = none.silhouettes = false;
+    none.empty_blocks = none.closed_casters = none.plane_cut = none.silhouettes = none.wedges = false;
     SoftMethod off{"off", none}, empty{"empty", none}, cull{"cull", none}, cut{"cut", none}, fit{"fit", none},
-        silhouette{"silhouette", none}, all{"all", none, true, true};
+        silhouette{"silhouette", none}, wedge{"wedge", none}, all{"all", none, true, true};
     empty.skips.empty_blocks = true;
     cull.skips.closed_casters = true;
     cut.skips.plane_cut = true;
     cut.cut = true;
     fit.fit = true;
     silhouette.skips.silhouettes = true;
-    all.skips.empty_blocks = all.skips.closed_casters = all.skips.plane_cut = all.skips.silhouettes = true;
+    wedge.skips.wedges = true;
+    all.skips.empty_blocks = all.skips.closed_casters = all.skips.plane_cut = all.skips.silhouettes = all.skips.wedges = true;
     // The same two with every pair worked in the light pass's fragment stage (deferred_pairs = 0).
     SoftMethod off_fragment = off, all_fragment = all;
     off_fragment.name = "off_fragment";
     all_fragment.name = "all_fragment";
     off_fragment.deferred_pairs = all_fragment.deferred_pairs = 0;
-    return {off, empty, cull, cut, fit, silhouette, all, off_fragment, all_fragment};
+    return {off, empty, cull, cut, fit, silhouette, wedge, all, off_fragment, all_fragment};
 }
 
 /// One scene seen through the soft G-buffer, its light samples, LUT and both light grids.
@@ -426,6 +428,7 @@ void BM_SoftSkips(benchmark::State& state, const SceneSpec& spec) {
             state.counters["pairs_cut_" + m.name] = double(f.pairs_cut);
             state.counters["pairs_hard_" + m.name] = double(f.pairs_hard);
             state.counters["pairs_recovered_" + m.name] = double(f.pairs_recovered);
+            state.counters["pairs_wedged_" + m.name] = double(f.pairs_wedged);
             state.counters["exact_tests_" + m.name] = double(f.exact_tests);
             state.counters["passes_" + m.name] = double(f.passes);
             state.counters["overflow_" + m.name] = double(f.overflow);

@@ -178,10 +178,12 @@ struct Args {
 //                 (SoftSkips::plane_cut) and of the influence regions (cut_by_supporting_plane);
 //         fit   = the light grid fitted to the view samples (sintorn2008 §4.3) instead of their box;
 //         silhouette = outside every potential silhouette edge's region one test from the light
-//                 centre per pair (SoftSkips::silhouettes, laine2005 §3.3).
+//                 centre per pair (SoftSkips::silhouettes, laine2005 §3.3);
+//         wedge = view samples beyond one of a caster's wedge planes (its edges' planes tangent
+//                 to the light, its own plane) get no pair (SoftSkips::wedges).
 //   hard: cull  = light_facing_only; fit = fit_frustum; shadowed = skip_shadowed; box = clip_to_box;
 //         empty = skip_empty_texels (an occupancy stencil culls the fragments of sample-less texels).
-const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit", "silhouette"};
+const std::vector<std::string> kSoftSkips = {"empty", "cull", "cut", "fit", "silhouette", "wedge"};
 const std::vector<std::string> kHardSkips = {"cull", "fit", "shadowed", "box", "empty"};
 
 /// The flags' text as given, before checkArgs turns them into Args values.
@@ -337,7 +339,8 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
                    "hard and soft modes: the work skips on: all, none, or a comma list; soft: empty (empty list blocks "
                    "return at once), cull (closed casters' triangles facing away from the whole light), cut "
                    "(supporting-plane cut per pair and of the influence regions), fit (light grid fitted to the view "
-                   "samples), silhouette (outside every potential silhouette edge's region one test from the light centre); "
+                   "samples), silhouette (outside every potential silhouette edge's region one test from the light centre), "
+                   "wedge (view samples beyond one of a caster's wedge planes get no pair); "
                    "hard: cull, fit, shadowed (no retest of shadowed samples), box (clip to the triangle's "
                    "box), empty (an occupancy stencil culls the fragments of texels with no samples). None changes a "
                    "shadow bit")
@@ -1720,6 +1723,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         o.skips.closed_casters = !all_off && args.skip("cull");
         o.skips.plane_cut = !all_off && args.skip("cut");
         o.skips.silhouettes = !all_off && args.skip("silhouette");
+        o.skips.wedges = !all_off && args.skip("wedge");
         return o;
     };
     const penumbra::SampleBasedSoftGpuOptions options = makeOptions(false);
@@ -2046,7 +2050,8 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                      {"pairs_hard", frame.pairs_hard},
                      {"pairs_recovered", frame.pairs_recovered},
                      {"pairs_front", frame.pairs_front},
-                     {"tests_skipped", frame.pairs_cut + frame.pairs_hard},
+                     {"pairs_wedged", frame.pairs_wedged},
+                     {"tests_skipped", frame.pairs_cut + frame.pairs_hard + frame.pairs_wedged},
                      {"penumbra_texels", penumbra_texels}};
         j["skips"] = args.skip_list;
         if (args.check_skips) j["skips_check"] = skips_check;
