@@ -248,6 +248,17 @@ inline std::vector<glm::dvec4> sampleBasedSoftSampleTable(const LightSampleSets&
     return out;
 }
 
+/// SoftSkips::wedges: the radius about the light's centre of a sphere holding every light sample of
+/// `table` (sampleBasedSoftSampleTable's; its first `samples` entries), 1e-9 relative above the
+/// largest distance computed in double. The wedge planes need only the samples on their far side:
+/// every bit is a sample's. (For a spherical light about r; the shape's bound, r sqrt 3, is 1.7x.)
+inline double sampleBasedSoftSampleReach(const std::vector<glm::dvec4>& table, size_t samples, const glm::dvec3& centre) {
+    double reach = 0.0;
+    for (size_t i = 0; i < samples && i < table.size(); ++i)
+        reach = std::max(reach, detail::oracle::length3(glm::dvec3(table[i]) - centre));
+    return reach * (1.0 + 1e-9);
+}
+
 struct SampleBasedSoftCpuResult {
     uint32_t words_per_receiver = 0;  ///< ceil(N / 32)
     std::vector<uint32_t> masks;      ///< receivers * words_per_receiver: blocked light samples
@@ -371,7 +382,8 @@ inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double re
 
 /// SoftSkips::wedges: up to four planes F(x) = n . x + d per caster T (float n, d: what the
 /// light pass's fragment stage evaluates), each proven to have T's three vertices on its closed
-/// positive side and the light's bounding sphere strictly on its negative side. A blocked segment
+/// positive side and a sphere about the light's centre holding every light sample
+/// (sampleBasedSoftSampleReach) strictly on its negative side. A blocked segment
 /// from p to a light point l meets T, so F(p) >= 0 on each (F is affine, F(l) < 0 <= F(t) and
 /// p = t + s (t - l), s >= 0). Per edge the plane through it tangent to the sphere grown by 4
 /// delta, shifted delta towards the light (T's side of the edge's dihedral wedge, sintorn2008
@@ -557,10 +569,11 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     // SoftSkips::wedges: each caster's planes (the geometry stage's).
     const bool wedges = options.skips.wedges;
     std::vector<soft::WedgePlanes> wedge(wedges ? casters.triangle_count : 0);
+    const double sample_reach = sampleBasedSoftSampleReach(table, size_t(n) * k * rotations, frame.center);
     for (size_t t = 0; t < wedge.size(); ++t)
         wedge[t] = soft::wedgePlanes(glm::dvec3(casters.positions[casters.indices[3 * t]]),
                                      glm::dvec3(casters.positions[casters.indices[3 * t + 1]]),
-                                     glm::dvec3(casters.positions[casters.indices[3 * t + 2]]), frame.center, light_reach, eps);
+                                     glm::dvec3(casters.positions[casters.indices[3 * t + 2]]), frame.center, sample_reach, eps);
     const float wedge_mu2 = static_cast<float>(2.0 * soft::wedgeMu(eps) * 1.001);
 
     for (size_t r = 0; r < receivers.count; ++r) {

@@ -101,7 +101,7 @@ void main() {
     uint slot = PENUMBRA_SBS_NO_TRIANGLE;
 #if PENUMBRA_SBS_WEDGES
     const PenumbraSbsWedges wedges = penumbraSbsWedgePlanes(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz,
-                                                            penumbraSbsParams.bounds.x, penumbraSbsParams.epsilon.z);
+                                                            penumbraSbsParams.epsilon.w, penumbraSbsParams.epsilon.z);
 #endif
 #if PENUMBRA_SBS_DEFERRED
     if (count > 0 && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {

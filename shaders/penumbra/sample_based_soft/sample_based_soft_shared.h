@@ -184,7 +184,8 @@ struct PenumbraSbsParams {
     dvec4 scale;        // xyz: LightFrame::scale, w: the smallest semi-axis
     dvec4 bounds;       // x: light reach (max semi-axis * sqrt 3), y: |centre| + reach, z: plane budget
                         // (normalised units), w: the LUT's margin in world units (budget * min scale)
-    dvec4 epsilon;      // x: coplanar epsilon, y: tie epsilon, z: max of both, w: 0
+    dvec4 epsilon;      // x: coplanar epsilon, y: tie epsilon, z: max of both, w: the light samples'
+                        // reach from the centre (sampleBasedSoftSampleReach; SoftSkips::wedges)
     uvec4 grid;         // x = W, y = H, z = list block (samples per fragment per pass), w = block index
     uvec4 config;       // x = mode, y = N (samples per set), z = K (sets), w = words per view sample
     uvec4 counts;       // x = sample count, y = samples per list walked (max_list_blocks * list block),

@@ -355,6 +355,7 @@ public:
         influence_params_ = gl::Buffer(sizeof(InfluenceRegionParams), &influence_.params);
         const std::vector<glm::dvec4> world = sampleBasedSoftSampleTable(sets_, options_.rotations);
         samples_ = gl::Buffer::fromVector(world);
+        sample_reach_ = sampleBasedSoftSampleReach(world, size_t(n_) * k_ * options_.rotations, sets_.frame.center);
         work_ = gl::Buffer(PENUMBRA_SBS_WORK_WORDS * 4);
         lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
         dummy_ = gl::Buffer(16);
@@ -510,6 +511,7 @@ private:
     InfluenceRegionSetup influence_;
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
+    double sample_reach_ = 0.0;  // sampleBasedSoftSampleReach of the sample table
     gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_, near_blocks_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
@@ -674,6 +676,7 @@ private:
             const uint32_t c = slot == 0 ? 1u : (slot - 1) % kSlotsPerBlock;
             // Validated at construction: cannot throw.
             SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
+            p.epsilon.w = sample_reach_;  // SoftSkips::wedges: the light samples' sphere
             if (c == 3) p.reserved.y |= PENUMBRA_SBS_FLAG_COMPLEMENT;
             std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
