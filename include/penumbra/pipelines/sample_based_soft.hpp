@@ -781,7 +781,7 @@ struct SampleBasedSoftGpuOptions {
     bool count_work = true;  ///< work counters (atomics in the light pass)
     /// Deferred pairs: capacity, in (caster triangle, view sample) pairs, of a buffer the light
     /// pass's fragment stage appends its pairs to instead of working them (one per view sample of
-    /// the fragment's list block); a compute pass then does the same work with one pair per
+    /// the fragment's list block that SoftSkips::wedges keeps); a compute pass then does the same work with one pair per
     /// invocation (light_pass.comp.glsl), densely packed, after the light pass's draws (and again
     /// after the closed casters' second pass); the pairs that need the LUT's tables go on to a
     /// tables pass (light_pass_tables.comp.glsl). Fragments whose pairs do not fit go whole to

@@ -5,6 +5,7 @@
 // no attachments.
 // With PENUMBRA_SBS_DEFERRED (SampleBasedSoftGpuOptions::deferred_pairs) a fragment appends
 // (triangle slot, view sample) pairs to the pairs buffer instead, one per sample of its list block
+// that no wedge plane of the triangle rejects (SoftSkips::wedges: PENUMBRA_SBS_WEDGES, wedges.glsl)
 // (light_pass.geom.glsl stored the triangle's vertices in the slot), or, past that buffer's
 // capacity, (triangle slot, texel) to the fragments buffer; the compute pass light_pass.comp.glsl
 // does the same work after the draws. This program holds no pair work at all (llvmpipe runs a
