@@ -99,6 +99,35 @@ Tally compareOracle(const std::vector<uint32_t>& masks, uint32_t words, const st
 /// Rotation steps about the light's local z in the scene checks (sintorn2008 §4.2's jitter).
 constexpr uint32_t kRotations = 4;
 
+/// A spherical light's stratified sample sets (makeLightSampleSets).
+penumbra::LightSampleSets sphereSets(const dvec3& centre, double radius, uint32_t n, uint32_t sets, uint32_t seed) {
+    penumbra::Light light;
+    light.center = centre;
+    light.size = dvec3(radius);
+    penumbra::LightSampleOptions options;
+    options.count = n;
+    options.sets = sets;
+    options.seed = seed;
+    return penumbra::makeLightSampleSets(light, options);
+}
+
+/// A certified LUT of `sets` at `resolution` (generated on the CPU) and its GL buffer.
+struct CertifiedLut {
+    penumbra::LightLutSetup lut;
+    std::vector<uint32_t> words;
+    penumbra::gl::Buffer buffer;
+
+    CertifiedLut(const penumbra::LightSampleSets& sets, uint32_t resolution) {
+        penumbra::LightLutOptions options;
+        options.resolution = resolution;
+        options.certified = true;
+        lut = penumbra::lightLutSetup(sets, options);
+        words = penumbra::generateLightLut(lut);
+        buffer = penumbra::gl::Buffer::fromVector(words);
+    }
+    penumbra::BufferRange table() const { return {buffer.id(), 0, buffer.size()}; }
+};
+
 struct Case {
     std::string name;
     penumbra::scene::Scene scene;
@@ -121,18 +150,11 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
             penumbra::Light light;
             light.center = dvec3(c.scene.light.position);
             light.size = dvec3(double(c.scene.light.radius));
-            penumbra::LightSampleOptions sample_options;
-            sample_options.count = n;
-            sample_options.sets = 2;
-            sample_options.seed = 11;
-            const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
-            penumbra::LightLutOptions lut_options;
-            lut_options.resolution = 64;
-            lut_options.certified = true;
-            const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
-            const std::vector<uint32_t> lut_words = penumbra::generateLightLut(lut);
-            const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(lut_words);
-            const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+            const penumbra::LightSampleSets sets = sphereSets(light.center, double(c.scene.light.radius), n, 2, 11);
+            const CertifiedLut certified(sets, 64);
+            const penumbra::LightLutSetup& lut = certified.lut;
+            const std::vector<uint32_t>& lut_words = certified.words;
+            const penumbra::BufferRange lut_table = certified.table();
 
             // Receivers on the surfaces; half of them use set 1 and each one of 4 rotation steps (the
             // per-pixel choice of sampleBasedSoftSelection): selection word set | step << 8.
@@ -391,17 +413,10 @@ TEST_CASE("GPU sample-based soft: G-buffer view samples, exact == oracle, multi-
     penumbra::Light light;
     light.center = dvec3(scene.light.position);
     light.size = dvec3(double(scene.light.radius));
-    penumbra::LightSampleOptions so;
-    so.count = 128;
-    so.sets = 1;
-    so.seed = 5;
-    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, so);
-    penumbra::LightLutOptions lo_options;
-    lo_options.resolution = 64;
-    lo_options.certified = true;
-    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lo_options);
-    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
-    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    const penumbra::LightSampleSets sets = sphereSets(light.center, double(scene.light.radius), 128, 1, 5);
+    const CertifiedLut certified(sets, 64);
+    const penumbra::LightLutSetup& lut = certified.lut;
+    const penumbra::BufferRange lut_table = certified.table();
     penumbra::InfluenceRegionOptions io;
     io.grid_width = io.grid_height = 64;
     io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
@@ -678,17 +693,10 @@ TEST_CASE("SoftSkips::closed_casters: a culled face's bits through the second pa
     penumbra::Light light;
     light.center = dvec3(0.3, 0.5, 0.6);
     light.size = dvec3(0.05);
-    penumbra::LightSampleOptions sample_options;
-    sample_options.count = n;
-    sample_options.sets = 1;
-    sample_options.seed = 5;
-    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
-    penumbra::LightLutOptions lut_options;
-    lut_options.resolution = 32;
-    lut_options.certified = true;
-    const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
-    const penumbra::gl::Buffer lut_buffer = penumbra::gl::Buffer::fromVector(penumbra::generateLightLut(lut));
-    const penumbra::BufferRange lut_table{lut_buffer.id(), 0, lut_buffer.size()};
+    const penumbra::LightSampleSets sets = sphereSets(light.center, 0.05, n, 1, 5);
+    const CertifiedLut certified(sets, 32);
+    const penumbra::LightLutSetup& lut = certified.lut;
+    const penumbra::BufferRange lut_table = certified.table();
     // The light grid over the receivers (the casters need not lie inside its frustum).
     glm::vec3 r_lo(1e30f), r_hi(-1e30f);
     for (const auto& p : points) r_lo = glm::min(r_lo, p - 0.01f), r_hi = glm::max(r_hi, p + 0.01f);

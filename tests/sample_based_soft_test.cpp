@@ -1266,7 +1266,7 @@ void wedgeCases(long count, uint32_t seed, WedgeStats& st) {
         const double eps = c % 2 == 0 ? 1e-9 : 2e-5;  // the oracle's default; the demo's depth input
         const double reach = radius * std::sqrt(3.0);  // a cube light's bounding sphere
         const soft::WedgePlanes w = soft::wedgePlanes(v[0], v[1], v[2], centre, reach, eps);
-        const float mu2 = float(2.0 * soft::wedgeMu(eps) * 1.001);
+        const float mu2 = soft::wedgeMu2(eps);
         for (const glm::vec4& q : w.planes) st.planes += q != glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
         ++st.cases;
         penumbra::reference::VisibilityOptions options;

@@ -66,6 +66,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -145,9 +146,9 @@ struct SoftSkips {
     /// 1 % beyond the farthest receiver). Counted: pairs_hard.
     bool silhouettes = false;
     /// A (receiver p, caster T) pair is skipped before anything else when p lies beyond one of T's
-    /// wedge planes (detail::soft::wedgePlanes: the three planes through T's edges tangent to the
-    /// light's bounding sphere, and T's plane, each with T on one side and the whole light strictly
-    /// on the other) by more than 2 mu max(S, |p|_inf), mu = 4 max(tie, coplanar epsilon) + 2^-21,
+    /// wedge planes (detail::soft::wedgePlanes: the three planes through T's edges tangent to a
+    /// sphere about the light's centre holding every light sample, sampleBasedSoftSampleReach, and
+    /// T's plane, each with T on one side and every light sample strictly on the other) by more than 2 mu max(S, |p|_inf), mu = 4 max(tie, coplanar epsilon) + 2^-21,
     /// S the largest coordinate of T and the light. Every point of a blocked segment lies on T's
     /// side of each plane, so T blocks no light sample for p, and p and the segment stay farther
     /// from T than any rule of the oracle reaches: not near a closed triangle, no tie. The GPU
@@ -399,6 +400,9 @@ struct WedgePlanes {
 /// that epsilon times twice the receiver's or the scene's largest coordinate) plus 2^-21 for the
 /// float planes' rounding.
 inline double wedgeMu(double eps) { return 4.0 * eps + 0x1.0p-21; }
+/// wedgeRejects' per-receiver margin factor, float(2 mu * 1.001): set up once (the GPU reads it from
+/// the parameter block, PenumbraSbsParams::reserved.z).
+inline float wedgeMu2(double eps) { return static_cast<float>(2.0 * wedgeMu(eps) * 1.001); }
 
 /// `plane` (float coefficients, evaluated exactly in double up to the bounded rounding) has every
 /// vertex on its closed positive side and the sphere (centre, reach) strictly on its negative side.
@@ -460,7 +464,7 @@ inline WedgePlanes wedgePlanes(const glm::dvec3& v0, const glm::dvec3& v1, const
 /// The float test of light_pass.frag.glsl (the same operations): p lies farther than the margin
 /// on the negative side of one of the planes, so T blocks no light point for p and the oracle's
 /// rules cannot reach it (its distance to T's planes exceeds 2 mu max(S, |p|_inf)); receivers
-/// beyond 4 S are kept. `mu2` = float(2 mu * 1.001).
+/// beyond 4 S are kept. `mu2` = wedgeMu2.
 inline bool wedgeRejects(const WedgePlanes& w, const glm::vec3& p, float mu2) {
     const float size = std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z)));
     if (!(size <= 4.0f * w.reach)) return false;
@@ -574,7 +578,7 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         wedge[t] = soft::wedgePlanes(glm::dvec3(casters.positions[casters.indices[3 * t]]),
                                      glm::dvec3(casters.positions[casters.indices[3 * t + 1]]),
                                      glm::dvec3(casters.positions[casters.indices[3 * t + 2]]), frame.center, sample_reach, eps);
-    const float wedge_mu2 = static_cast<float>(2.0 * soft::wedgeMu(eps) * 1.001);
+    const float wedge_mu2 = soft::wedgeMu2(eps);
 
     for (size_t r = 0; r < receivers.count; ++r) {
         const glm::dvec3 p(receivers.positions[r]);
@@ -871,8 +875,10 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
     const double light_reach = max_scale * std::sqrt(3.0);
     const double budget = (lut ? lut->options.tolerance : 0.0) * o.plane_budget;
     p.bounds = glm::dvec4(light_reach, detail::oracle::length3(f.center) + light_reach, budget, budget * min_scale);
-    p.epsilon = glm::dvec4(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon,
-                           std::max(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon), 0.0);
+    // w: the wedges' sphere, the light shape's bound here (holds every sample); the pipeline
+    // tightens it to its sample table's sampleBasedSoftSampleReach.
+    const double eps = std::max(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon);
+    p.epsilon = glm::dvec4(o.oracle.coplanar_epsilon, o.oracle.tie_epsilon, eps, light_reach);
     p.grid = glm::uvec4(o.grid_width, o.grid_height, o.list_block, block);
     p.config = glm::uvec4(static_cast<uint32_t>(o.mode), n, k, (n + 31) / 32);
     p.counts = glm::uvec4(sample_count, o.max_list_blocks * o.list_block, lut ? lut->params.tables_per_set : (n + 127) / 128,
@@ -884,7 +890,10 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
                            (o.skips.plane_cut ? PENUMBRA_SBS_FLAG_PLANE_CUT : 0u) |
                            (o.skips.silhouettes ? PENUMBRA_SBS_FLAG_SILHOUETTES : 0u) |
                            (o.skips.closed_casters && closed && culled_pass ? PENUMBRA_SBS_FLAG_CULLED_PASS : 0u);
-    p.reserved = glm::uvec4(o.rotations, flags, 0u, 0u);
+    float mu2 = detail::soft::wedgeMu2(eps);
+    uint32_t mu2_bits = 0;
+    std::memcpy(&mu2_bits, &mu2, sizeof mu2_bits);
+    p.reserved = glm::uvec4(o.rotations, flags, mu2_bits, 0u);
     if (lut) p.lut = lut->params;
     return p;
 }

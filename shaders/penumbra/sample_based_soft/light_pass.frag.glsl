@@ -106,7 +106,7 @@ void main() {
     // otherwise).
 #if PENUMBRA_SBS_WEDGES
     const PenumbraSbsWedges wedges = PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin);
-    const float wedge_mu2 = float(2.0LF * penumbraSbsWedgeMu(P.epsilon.z) * 1.001LF);
+    const float wedge_mu2 = uintBitsToFloat(P.reserved.z);  // detail::soft::wedgeMu2
     uint kept = 0u;
     for (uint i = 0u; i < range.y; ++i)
         if (!penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(range.x + i), wedge_mu2)) ++kept;

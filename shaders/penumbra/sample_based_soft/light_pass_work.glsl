@@ -222,7 +222,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
     uint pairs = 0u, ignored = 0u, unproven_pairs = 0u, uncertain_bits = 0u, tests = 0u, unproven_planes = 0u, cut = 0u,
          hard = 0u, recovered = 0u, front = 0u, wedged = 0u;
 #if PENUMBRA_SBS_WEDGES
-    const float wedge_mu2 = float(2.0LF * penumbraSbsWedgeMu(P.epsilon.z) * 1.001LF);
+    const float wedge_mu2 = uintBitsToFloat(P.reserved.z);  // detail::soft::wedgeMu2
 #endif
     // SoftSkips::closed_casters (the twin's two sweeps): the first pass over a closed draw flags the
     // samples within the oracle's coplanar reach of a kept triangle and not provably outside it (and

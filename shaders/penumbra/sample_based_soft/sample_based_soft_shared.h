@@ -184,13 +184,15 @@ struct PenumbraSbsParams {
     dvec4 scale;        // xyz: LightFrame::scale, w: the smallest semi-axis
     dvec4 bounds;       // x: light reach (max semi-axis * sqrt 3), y: |centre| + reach, z: plane budget
                         // (normalised units), w: the LUT's margin in world units (budget * min scale)
-    dvec4 epsilon;      // x: coplanar epsilon, y: tie epsilon, z: max of both, w: the light samples'
-                        // reach from the centre (sampleBasedSoftSampleReach; SoftSkips::wedges)
+    dvec4 epsilon;      // x: coplanar epsilon, y: tie epsilon, z: max of both, w: radius about the
+                        // centre holding every light sample (SoftSkips::wedges; the pipeline sets
+                        // sampleBasedSoftSampleReach, else the light's bound, x of bounds)
     uvec4 grid;         // x = W, y = H, z = list block (samples per fragment per pass), w = block index
     uvec4 config;       // x = mode, y = N (samples per set), z = K (sets), w = words per view sample
     uvec4 counts;       // x = sample count, y = samples per list walked (max_list_blocks * list block),
                         // z = tables per set, w = 1 when a per-sample set buffer is bound
-    uvec4 reserved;     // x = R (rotation steps about local z; 1 = none), y = PENUMBRA_SBS_FLAG_* bits
+    uvec4 reserved;     // x = R (rotation steps about local z; 1 = none), y = PENUMBRA_SBS_FLAG_* bits,
+                        // z = float bits of SoftSkips::wedges' margin factor (detail::soft::wedgeMu2)
     PenumbraLutParams lut;
 };
 

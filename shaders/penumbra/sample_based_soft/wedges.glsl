@@ -80,7 +80,7 @@ PenumbraSbsWedges penumbraSbsWedgePlanes(dvec3 v0, dvec3 v1, dvec3 v2, dvec3 cen
 }
 
 // View sample p beyond one of the planes by more than the margin (receivers beyond 4 S are kept).
-// mu2 = float(2 mu * 1.001).
+// mu2 = float(2 mu * 1.001) (detail::soft::wedgeMu2, set up on the host: params reserved.z).
 bool penumbraSbsWedgeRejects(PenumbraSbsWedges w, vec3 p, float mu2) {
     const vec3 ap = abs(p);
     const float size = max(ap.x, max(ap.y, ap.z));

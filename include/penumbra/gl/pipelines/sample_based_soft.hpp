@@ -676,7 +676,7 @@ private:
             const uint32_t c = slot == 0 ? 1u : (slot - 1) % kSlotsPerBlock;
             // Validated at construction: cannot throw.
             SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
-            p.epsilon.w = sample_reach_;  // SoftSkips::wedges: the light samples' sphere
+            p.epsilon.w = sample_reach_;  // SoftSkips::wedges: the sample table's own sphere (tighter)
             if (c == 3) p.reserved.y |= PENUMBRA_SBS_FLAG_COMPLEMENT;
             std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
