@@ -1323,3 +1323,139 @@ TEST_CASE("SoftSkips::wedges: a rejected receiver is never blocked by the triang
     CHECK(st.misses == 0);
     CHECK(st.too_close == 0);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Exact: the side planes (detail::soft::sidePlane / sideVerdict, the GPU's penumbraSbsSidePlane)
+// decide the LUT's uncertain bits before any exact test. On every pair where Exact trusts the LUT
+// (not near T, |det| provable, the margin above the oracle's reach at the light: the twin's
+// pair-level rules, with the margin as small as they allow), a decided light sample must get the
+// oracle's verdict (hit, at its own epsilons; its ties only flag closeness, as for the LUT's
+// certain bits: reported). Light samples: random in the light, and
+// adversarial ones moved to just inside, at and just beyond the margin of each of the four planes.
+// The same cases with the threshold forced to 0 (a sign test) must disagree with the oracle
+// somewhere: the cases reach the oracle's coplanar and tie rules.
+
+namespace {
+
+struct SideStats {
+    uint64_t pairs = 0, samples = 0, decided = 0, wrong = 0, ties = 0, sign_wrong = 0, outside = 0;
+};
+
+void sideCases(long count, uint32_t seed, SideStats& st) {
+    namespace soft = penumbra::detail::soft;
+    namespace oracle = penumbra::detail::oracle;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0), zero_one(0.0, 1.0);
+    auto vec = [&] { return dvec3(unit(rng), unit(rng), unit(rng)); };
+    auto inBall = [&] {
+        for (;;) {
+            const dvec3 v = vec();
+            if (glm::dot(v, v) <= 1.0) return v;
+        }
+    };
+    for (long c = 0; c < count; ++c) {
+        const int family = int(c % 5);
+        const double offset = family == 3 ? 1e4 : 0.0;
+        dvec3 v[3] = {vec(), vec(), vec()};
+        if (family == 1) v[2] = v[0] + 1e-6 * vec();
+        if (family == 2) for (auto& x : v) x *= 1e-3;
+        const double radius = std::pow(10.0, -4.0 + 4.0 * zero_one(rng));
+        dvec3 centre = dvec3(0.0, 0.0, 3.0) + vec();
+        if (family == 4) {  // the light touching or straddling T's plane, beside T or over it
+            const dvec3 n = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
+            const dvec3 w(zero_one(rng), zero_one(rng), zero_one(rng));
+            const dvec3 foot = (c / 5) % 2 == 0 ? v[0] + 2.0 * vec() : (w.x * v[0] + w.y * v[1] + w.z * v[2]) / (w.x + w.y + w.z);
+            centre = foot + n * radius * (zero_one(rng) < 0.5 ? 0.5 : 1.0 + 1e-9);
+        }
+        for (auto& x : v) x = dvec3(glm::vec3(x + offset));
+        centre += offset;
+        penumbra::reference::VisibilityOptions options;
+        options.tie_epsilon = c % 3 == 0 ? 1e-7 : 1e-9;
+        options.coplanar_epsilon = c % 2 == 0 ? 1e-9 : 2e-5;
+        const double eps = std::max(options.tie_epsilon, options.coplanar_epsilon);
+        const double light_reach = radius * std::sqrt(3.0);
+        const oracle::Triangle tri{v[0], v[1], v[2], 0u};
+        if (penumbra::detail::degenerateTriangle(v[0], v[1], v[2])) continue;
+        const double light_distance2 = penumbra::detail::pointTriangleDistance2<double>(centre, v[0], v[1], v[2]);
+        for (int r = 0; r < 4; ++r) {
+            const dvec3 bary(zero_one(rng), zero_one(rng), zero_one(rng));
+            const dvec3 on_t = (bary.x * v[0] + bary.y * v[1] + bary.z * v[2]) / (bary.x + bary.y + bary.z);
+            const dvec3 p = dvec3(glm::vec3(on_t + (on_t - centre) * (3.0 * zero_one(rng)) + vec() * (r < 2 ? 1.0 : 1e-3)));
+            // The twin's pair-level rules: where Exact would not trust the LUT, no side plane is used.
+            const double scale_v = std::max(soft::maxAbs3(v[0] - p), std::max(soft::maxAbs3(v[1] - p), soft::maxAbs3(v[2] - p)));
+            const double scale_hi = std::max(scale_v, soft::maxAbs3(centre - p) + light_reach);
+            const double reach = 2.0 * eps * scale_hi;
+            if (penumbra::detail::pointTriangleDistance2<double>(p, v[0], v[1], v[2]) <= reach * reach * (1.0 + 1e-9)) continue;
+            const double light_near = 2.0 * options.coplanar_epsilon * scale_hi + light_reach;
+            const bool light_touches = light_distance2 <= light_near * light_near * (1.0 + 1e-9);
+            const double margin = 2.0 * (light_touches ? eps : options.tie_epsilon) * scale_hi * (1.0 + 1e-3);
+            const dvec3 a = v[0] - p, b = v[1] - p, cc = v[2] - p;
+            const double det = oracle::dot3(a, oracle::cross3(b, cc));
+            const double det_bound = 16.0 * soft::kEpsilon * oracle::length3(a) * oracle::length3(b) * oracle::length3(cc);
+            if (!(std::fabs(det) > det_bound)) continue;
+            const bool positive = det > 0.0;
+            const soft::SidePlane planes[4] = {
+                soft::sidePlane(p, a, b, positive, centre, light_reach, margin),
+                soft::sidePlane(p, b, cc, positive, centre, light_reach, margin),
+                soft::sidePlane(p, cc, a, positive, centre, light_reach, margin),
+                soft::sidePlane(v[0], v[1] - v[0], v[2] - v[0], positive, centre, light_reach, margin),
+            };
+            soft::SidePlane signs[4];
+            for (int i = 0; i < 4; ++i) signs[i] = soft::SidePlane{planes[i].n, 0.0};
+            ++st.pairs;
+            for (int s = 0; s < 40; ++s) {
+                dvec3 l = centre + radius * inBall();
+                if (s >= 16) {
+                    // Onto plane i, then to -2, -1, -0.5, 0.5, 1 or 2 margins from it (plus noise).
+                    const int i = (s - 16) % 4;
+                    const dvec3 n = planes[i].n;
+                    const double length = glm::length(n);
+                    if (length > 0.0) {
+                        const dvec3 origin = i == 3 ? v[0] : p;
+                        static const double kAt[6] = {-2.0, -1.0, -0.5, 0.5, 1.0, 2.0};
+                        const double at = kAt[((s - 16) / 4) % 6] * margin * (1.0 + 0.01 * unit(rng));
+                        const dvec3 moved = l - n * ((glm::dot(n, l - origin) / length - at) / length);
+                        if (glm::length(moved - centre) <= radius) l = moved;  // light samples stay in the light
+                        else ++st.outside;
+                    }
+                }
+                ++st.samples;
+                const oracle::Verdict truth = oracle::classifySegment(tri, oracle::makeSegmentQuery(p, l, options));
+                const int side = soft::sideVerdict(l, p, v[0], planes);
+                const int sign = soft::sideVerdict(l, p, v[0], signs);
+                if (sign != 0 && (sign < 0) != truth.hit) ++st.sign_wrong;
+                if (side == 0) continue;
+                ++st.decided;
+                if (truth.fragile) ++st.ties;
+                if ((side < 0) != truth.hit) {
+                    if (st.wrong++ < 4)
+                        MESSAGE("side-plane miss: family ", family, ", triangle (", v[0].x, ", ", v[0].y, ", ", v[0].z, ") (", v[1].x,
+                                ", ", v[1].y, ", ", v[1].z, ") (", v[2].x, ", ", v[2].y, ", ", v[2].z, "), receiver (", p.x, ", ",
+                                p.y, ", ", p.z, "), light sample (", l.x, ", ", l.y, ", ", l.z, "), decided ", side,
+                                ", oracle hit ", truth.hit, " fragile ", truth.fragile, "; distances / margin ",
+                                glm::dot(planes[0].n, l - p) / glm::length(planes[0].n) / margin, " ",
+                                glm::dot(planes[1].n, l - p) / glm::length(planes[1].n) / margin, " ",
+                                glm::dot(planes[2].n, l - p) / glm::length(planes[2].n) / margin, " ",
+                                glm::dot(planes[3].n, l - v[0]) / glm::length(planes[3].n) / margin, ", touches ", light_touches,
+                                ", |l - centre| / radius ", glm::length(l - centre) / radius, ", margin ", margin,
+                                ", dist(l, T) ", std::sqrt(penumbra::detail::pointTriangleDistance2<double>(l, v[0], v[1], v[2])));
+                }
+            }
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("Exact's side planes decide a light sample only as the oracle does (10^5 random + adversarial cases)") {
+    SideStats st;
+    sideCases(penumbra::test::envCount("PENUMBRA_SIDE_CASES", 100000), penumbra::test::testSeed(17), st);
+    MESSAGE("side planes: ", st.pairs, " pairs, ", st.samples, " light samples (", st.outside,
+            " adversarial ones left random: the plane misses the light there), ", st.decided, " decided; decided against the oracle ",
+            st.wrong, ", decided where the oracle reports a tie ", st.ties, "; a sign test (threshold 0) against the oracle ",
+            st.sign_wrong);
+    CHECK(st.pairs >= 100000);
+    CHECK(st.decided > st.samples / 2);
+    CHECK(st.wrong == 0);
+    CHECK(st.sign_wrong > 100);
+}

@@ -18,9 +18,11 @@
 //   Lut:   the seed's approximation (centre sampling, penumbraLutBehind); casters the receiver lies
 //          on (the oracle's coplanar rule for every sample) are ignored, as in Exact.
 //   Exact: certified lookups (lutCertain / lutCombine); the uncertain bits are decided by the
-//          oracle's own per-triangle verdict (detail::oracle::classifySegment with the oracle's
-//          options), so the mask equals reference::VisibilityOracle::evaluate's bit for bit on every
-//          pair the oracle does not call a tie. Certain bits are only trusted where that is proven:
+//          pair's own world planes where they prove the side with the LUT's separation
+//          (soft::sideVerdict: nearly all), the rest by the oracle's own per-triangle verdict
+//          (detail::oracle::classifySegment with the oracle's options), so the mask equals
+//          reference::VisibilityOracle::evaluate's bit for bit on every pair the oracle does not
+//          call a tie. Certain bits (and side-plane verdicts) are only trusted where that is proven:
 //            - each plane carries a rounding bound (float inputs, double arithmetic, the change of
 //              frame) in normalised units; a plane whose bound exceeds half the LUT's tolerance
 //              counts as all-uncertain;
@@ -272,7 +274,9 @@ struct SampleBasedSoftCpuResult {
     uint64_t planes_unproven = 0;   ///< Exact: planes whose rounding bound exceeded the tolerance
     uint64_t bits = 0;              ///< pair bits evaluated (pairs x N)
     uint64_t uncertain_bits = 0;    ///< Exact: pair bits the LUT could not vouch for
-    uint64_t exact_tests = 0;       ///< per-sample oracle verdicts computed
+    /// Per-sample oracle verdicts computed (Exact: the uncertain bits the side planes left, and
+    /// every bit of unproven pairs; Brute: every bit).
+    uint64_t exact_tests = 0;
     uint64_t triangles_culled = 0;  ///< SoftSkips::closed_casters: casters culled (each counted once)
     uint64_t pairs_cut = 0;         ///< SoftSkips::plane_cut: pairs skipped (not in `pairs`)
     uint64_t pairs_wedged = 0;      ///< SoftSkips::wedges: pairs skipped first (in no other counter)
@@ -325,6 +329,47 @@ inline LocalPlane localPlane(const LightFrame& frame, const glm::dvec3& origin, 
     out.plane = frame.planeToLocal(glm::dvec4(n, w));
     out.proven = error <= budget;
     return out;
+}
+
+/// Exact: a plane that decides the LUT's uncertain bits in world space (the GPU's
+/// penumbraSbsSidePlane, step for step): the plane through `origin` spanned by a and b (flipped by
+/// `flip`; behind: dot(n, x - origin) < 0, localPlane's side) and the threshold above which
+/// |dot(n, l - origin)| proves a light sample l farther than `margin` (world units) from the exact
+/// plane on the same inputs, on the computed value's side. Why: the value is off by at most
+/// (dn + 4 eps |n|) |l - origin| (dn = 8 eps |a| |b| as in localPlane; l - origin rounds by eps
+/// |l - origin|, the dot product by 3 eps |n| |l - origin|), |l - origin| <= |centre - origin| +
+/// light_reach, and the exact normal is at most |n| + dn long; 1e-6 relative covers the bound's
+/// own rounding. A zero normal decides nothing (its value is 0).
+struct SidePlane {
+    glm::dvec3 n{0.0};
+    double threshold = 0.0;
+};
+
+inline SidePlane sidePlane(const glm::dvec3& origin, const glm::dvec3& a, const glm::dvec3& b, bool flip,
+                           const glm::dvec3& centre, double light_reach, double margin) {
+    SidePlane out;
+    out.n = oracle::cross3(a, b);
+    if (flip) out.n = -out.n;
+    const double length = oracle::length3(out.n);
+    const double dn = 8.0 * kEpsilon * oracle::length3(a) * oracle::length3(b);
+    const double reach = (oracle::length3(centre - origin) + light_reach) * (1.0 + 1e-6);
+    out.threshold = ((dn + 4.0 * kEpsilon * length) * reach + margin * (length + dn)) * (1.0 + 1e-6);
+    return out;
+}
+
+/// A light sample l against T's three edge planes through p and T's plane through v0 (sidePlane):
+/// -1 behind every one by the margin (T blocks l for p), 1 in front of one by the margin (T does
+/// not), 0 neither (left to the oracle's test). With the margin above the oracle's tie and coplanar
+/// reach at l (the pair-level conditions under which Exact trusts the LUT), a decided sample gets
+/// the oracle's verdict: the same argument as a certain LUT bit's.
+inline int sideVerdict(const glm::dvec3& l, const glm::dvec3& p, const glm::dvec3& v0, const SidePlane (&planes)[4]) {
+    const glm::dvec3 dp = l - p, d0 = l - v0;
+    const double g0 = oracle::dot3(planes[0].n, dp), g1 = oracle::dot3(planes[1].n, dp), g2 = oracle::dot3(planes[2].n, dp),
+                 g3 = oracle::dot3(planes[3].n, d0);
+    if (g0 > planes[0].threshold || g1 > planes[1].threshold || g2 > planes[2].threshold || g3 > planes[3].threshold) return 1;
+    if (g0 < -planes[0].threshold && g1 < -planes[1].threshold && g2 < -planes[2].threshold && g3 < -planes[3].threshold)
+        return -1;
+    return 0;
 }
 
 /// A caster's supporting plane against the light, for the skips (the GPU's light_pass.geom.glsl
@@ -711,6 +756,15 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 ++result.pairs_front;
                 continue;
             }
+            // Exact: the planes that decide the LUT's uncertain bits, with the LUT's separation in
+            // world units (margin_world, above the oracle's reach at the light for this pair).
+            soft::SidePlane side_planes[4];
+            if (mode == SoftMode::Exact) {
+                side_planes[0] = soft::sidePlane(p, a, b, positive, frame.center, light_reach, margin_world);
+                side_planes[1] = soft::sidePlane(p, b, c, positive, frame.center, light_reach, margin_world);
+                side_planes[2] = soft::sidePlane(p, c, a, positive, frame.center, light_reach, margin_world);
+                side_planes[3] = soft::sidePlane(v0, v1 - v0, v2 - v0, positive, frame.center, light_reach, margin_world);
+            }
             for (uint32_t block = 0; block < tables; ++block) {
                 const uint32_t table = set * tables + block;
                 result.planes += 4;
@@ -742,7 +796,10 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                     while (uncertain) {
                         const uint32_t bit = static_cast<uint32_t>(__builtin_ctz(uncertain));
                         uncertain &= uncertain - 1u;
-                        if (decide(block * 128u + 32u * w + bit)) m |= 1u << bit;
+                        // The pair's own planes first (nearly every uncertain bit), then the oracle.
+                        const uint32_t s = block * 128u + 32u * w + bit;
+                        const int side = soft::sideVerdict(glm::dvec3(world[s]), p, v0, side_planes);
+                        if (side < 0 || (side == 0 && decide(s))) m |= 1u << bit;
                     }
                     out[block * 4 + w] |= m;
                 }

@@ -14,10 +14,12 @@
 //   - Exact: certified lookups combined with penumbraLutCombine; a plane whose rounding bound
 //     exceeds the budget (params.bounds.z, a quarter of the LUT's tolerance by default: the float
 //     rounding of the plane takes another quarter) is all-uncertain; pairs within the oracle's
-//     coplanar/tie reach or with an unprovable det are decided sample by sample. Every uncertain
-//     light sample is decided by the hard pipeline's exact fp64 test (penumbra/alias_free_hard/
-//     blocker_test.glsl, penumbraAfhBlocks with that sample as the point light: the oracle's
-//     verdict on every pair it does not call a tie, coplanar rule with the oracle's epsilon);
+//     coplanar/tie reach or with an unprovable det are decided sample by sample. Uncertain light
+//     samples are decided by the pair's own world planes where their side is proven with the
+//     LUT's separation (penumbraSbsSideVerdict: nearly all), the rest by the hard pipeline's exact
+//     fp64 test (penumbra/alias_free_hard/blocker_test.glsl, penumbraAfhBlocks with that sample as
+//     the point light: the oracle's verdict on every pair it does not call a tie, coplanar rule
+//     with the oracle's epsilon);
 //   - Brute: every light sample by that exact test.
 // Result: atomicOr into masks[id * words + s / 32] (bit s % 32: light sample s of the view
 // sample's set blocked).
@@ -163,6 +165,41 @@ PenumbraSbsPlane penumbraSbsLocalPlane(dvec3 origin, dvec3 a, dvec3 b, bool flip
     return result;
 }
 
+// Exact: the LUT's uncertain bits decided by the pair's own planes in world space, before any
+// exact test (detail::soft::sidePlane / sideVerdict, step for step). The plane through `origin`
+// spanned by a and b (flipped by `flip`; behind: dot(n, x - origin) < 0, the local plane's side)
+// and the threshold above which |dot(n, l - origin)| proves a light sample l farther than `margin`
+// (world units) from the exact plane on the float inputs, on the computed value's side: the value is
+// off by at most (dn + 4 eps |n|) |l - origin| (dn = 8 eps |a| |b| as in penumbraSbsLocalPlane,
+// l - origin and the dot product rounded), |l - origin| <= |centre - origin| + light_reach and the
+// exact normal's length <= |n| + dn; 1e-6 relative covers the bound's own rounding. A zero normal
+// decides nothing (value 0).
+struct PenumbraSbsSidePlane {
+    dvec3 n;
+    double threshold;
+};
+PenumbraSbsSidePlane penumbraSbsSidePlane(dvec3 origin, dvec3 a, dvec3 b, bool flip, const PenumbraSbsParams P, double margin) {
+    dvec3 n = penumbraSbsCross(a, b);
+    if (flip) n = -n;
+    const double length = penumbraSbsLength(n);
+    precise double dn = 8.0LF * kPenumbraSbsEpsilon * penumbraSbsLength(a) * penumbraSbsLength(b);
+    precise double reach = (penumbraSbsLength(P.center.xyz - origin) + P.bounds.x) * (1.0LF + 1e-6LF);
+    precise double threshold = ((dn + 4.0LF * kPenumbraSbsEpsilon * length) * reach + margin * (length + dn)) * (1.0LF + 1e-6LF);
+    return PenumbraSbsSidePlane(n, threshold);
+}
+// A light sample l against T's three edge planes through p and T's plane through v0: -1 behind
+// every one by the margin (T blocks it), 1 in front of one by the margin (T does not), 0 neither.
+int penumbraSbsSideVerdict(dvec3 l, dvec3 p, dvec3 v0, PenumbraSbsSidePlane e0, PenumbraSbsSidePlane e1,
+                           PenumbraSbsSidePlane e2, PenumbraSbsSidePlane t) {
+    precise dvec3 dp = l - p;
+    precise dvec3 d0 = l - v0;
+    const double g0 = penumbraSbsDot(e0.n, dp), g1 = penumbraSbsDot(e1.n, dp), g2 = penumbraSbsDot(e2.n, dp),
+                 g3 = penumbraSbsDot(t.n, d0);
+    if (g0 > e0.threshold || g1 > e1.threshold || g2 > e2.threshold || g3 > t.threshold) return 1;
+    if (g0 < -e0.threshold && g1 < -e1.threshold && g2 < -e2.threshold && g3 < -t.threshold) return -1;
+    return 0;
+}
+
 // A view sample's light-sample set and rotation step from its selection word (set 0, unrotated when
 // no per-sample buffer is bound; out of range: set 0 / unrotated, which the CPU twin rejects).
 uvec2 penumbraSbsSelection(const PenumbraSbsParams P, uint id) {
@@ -271,6 +308,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
         }
         ++pairs;
         bool all_exact = mode == PENUMBRA_SBS_MODE_BRUTE;
+        bool positive = false;  // det > 0: the planes' orientation
         PenumbraSbsPlane planes[4];
         if (hard_texel) {
             // SoftSkips::silhouettes: one exact test from the light centre, at the exact-test site
@@ -317,7 +355,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 }
                 if (exact) all_exact = true;
             }
-            const bool positive = det > 0.0LF;
+            positive = det > 0.0LF;
             planes[0] = penumbraSbsLocalPlane(p, a, b, positive);
             planes[1] = penumbraSbsLocalPlane(p, b, c, positive);
             planes[2] = penumbraSbsLocalPlane(p, c, a, positive);
@@ -366,6 +404,14 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
             if (entry < uint(penumbraSbsTableWork.length())) penumbraSbsTableWork[entry] = penumbraSbsPairIndex;  // always
             continue;
 #else
+#if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_EXACT_ID
+            // The planes that decide the LUT's uncertain bits (penumbraSbsSidePlane) with the LUT's
+            // own separation, which this pair passed: P.bounds.w above the oracle's reach at the light.
+            const PenumbraSbsSidePlane side0 = penumbraSbsSidePlane(p, v0 - p, v1 - p, positive, P, P.bounds.w);
+            const PenumbraSbsSidePlane side1 = penumbraSbsSidePlane(p, v1 - p, v2 - p, positive, P, P.bounds.w);
+            const PenumbraSbsSidePlane side2 = penumbraSbsSidePlane(p, v2 - p, v0 - p, positive, P, P.bounds.w);
+            const PenumbraSbsSidePlane side3 = penumbraSbsSidePlane(v0, v1 - v0, v2 - v0, positive, P, P.bounds.w);
+#endif
             for (uint block = 0u; block < tables; ++block) {
                 const uint table = set * tables + block;
 #if PENUMBRA_SBS_MODE == PENUMBRA_SBS_MODE_LUT_ID
@@ -390,6 +436,17 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 uncertain &= valid;
                 const uvec4 counts = uvec4(bitCount(uncertain));
                 uncertain_bits += (counts.x + counts.y) + (counts.z + counts.w);
+                // The uncertain bits the pair's planes decide (nearly all): no exact test for them.
+                uvec4 left = uncertain;
+                while (any(notEqual(left, uvec4(0u)))) {
+                    const uint k = left.x != 0u ? 0u : left.y != 0u ? 1u : left.z != 0u ? 2u : 3u;
+                    const uint word = left[k], bit = uint(findLSB(word));
+                    left[k] = word & (word - 1u);
+                    const int side = penumbraSbsSideVerdict(penumbraSbsSamples[sample_base + 128u * block + 32u * k + bit].xyz, p,
+                                                            v0, side0, side1, side2, side3);
+                    if (side != 0) uncertain[k] &= ~(1u << bit);
+                    if (side < 0) certain[k] |= 1u << bit;
+                }
                 penumbraSbsOrTable(mask_base + block * 4u, words - block * 4u, certain);
                 undecided[block] = uncertain;  // every bit certain (nearly always): nothing pending
                 pending |= uint(uncertain.x != 0u) << (4u * block) | uint(uncertain.y != 0u) << (4u * block + 1u) |
