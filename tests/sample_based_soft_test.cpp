@@ -1232,6 +1232,43 @@ TEST_SUITE("stress") {
 
 namespace {
 
+/// One random or adversarial caster case: family c % 5 is random, a sliver (two vertices almost
+/// equal), tiny, far from the origin (1e4), or a light touching or straddling T's plane beside T
+/// (and, with `over_triangle`, over T itself for odd c / 5). Float vertices, as the casters are.
+struct CasterCase {
+    int family = 0;
+    dvec3 v[3];
+    dvec3 centre;
+    double radius = 0.0;
+};
+
+CasterCase casterCase(long c, std::mt19937& rng, bool over_triangle) {
+    std::uniform_real_distribution<double> unit(-1.0, 1.0), zero_one(0.0, 1.0);
+    auto vec = [&] { return dvec3(unit(rng), unit(rng), unit(rng)); };
+    CasterCase k;
+    k.family = int(c % 5);
+    const double offset = k.family == 3 ? 1e4 : 0.0;
+    for (auto& x : k.v) x = vec();
+    if (k.family == 1) k.v[2] = k.v[0] + 1e-6 * vec();
+    if (k.family == 2) for (auto& x : k.v) x *= 1e-3;
+    k.radius = std::pow(10.0, -4.0 + 4.0 * zero_one(rng));
+    k.centre = dvec3(0.0, 0.0, 3.0) + vec();
+    if (k.family == 4) {
+        const dvec3 n = glm::normalize(glm::cross(k.v[1] - k.v[0], k.v[2] - k.v[0]));
+        dvec3 foot;
+        if (over_triangle && (c / 5) % 2 == 1) {
+            const dvec3 w(zero_one(rng), zero_one(rng), zero_one(rng));
+            foot = (w.x * k.v[0] + w.y * k.v[1] + w.z * k.v[2]) / (w.x + w.y + w.z);
+        } else {
+            foot = k.v[0] + 2.0 * vec();
+        }
+        k.centre = foot + n * k.radius * (zero_one(rng) < 0.5 ? 0.5 : 1.0 + 1e-9);
+    }
+    for (auto& x : k.v) x = dvec3(glm::vec3(x + offset));
+    k.centre += offset;
+    return k;
+}
+
 struct WedgeStats {
     uint64_t cases = 0, receivers = 0, rejected = 0, misses = 0, too_close = 0, planes = 0;
 };
@@ -1250,19 +1287,11 @@ void wedgeCases(long count, uint32_t seed, WedgeStats& st) {
         }
     };
     for (long c = 0; c < count; ++c) {
-        const int family = int(c % 5);
-        const double offset = family == 3 ? 1e4 : 0.0;  // far from the origin
-        dvec3 v[3] = {vec(), vec(), vec()};
-        if (family == 1) v[2] = v[0] + 1e-6 * vec();            // sliver: two vertices almost equal
-        if (family == 2) for (auto& x : v) x *= 1e-3;            // tiny
-        const double radius = std::pow(10.0, -4.0 + 4.0 * zero_one(rng));
-        dvec3 centre = dvec3(0.0, 0.0, 3.0) + vec();
-        if (family == 4) {  // the light straddling or touching T's plane
-            const dvec3 n = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
-            centre = v[0] + 2.0 * vec() + n * radius * (zero_one(rng) < 0.5 ? 0.5 : 1.0 + 1e-9);
-        }
-        for (auto& x : v) x = dvec3(glm::vec3(x + offset));  // float vertices, as the casters are
-        centre += offset;
+        const CasterCase k = casterCase(c, rng, false);
+        const int family = k.family;
+        const dvec3* v = k.v;
+        const dvec3 centre = k.centre;
+        const double radius = k.radius;
         const double eps = c % 2 == 0 ? 1e-9 : 2e-5;  // the oracle's default; the demo's depth input
         const double reach = radius * std::sqrt(3.0);  // a cube light's bounding sphere
         const soft::WedgePlanes w = soft::wedgePlanes(v[0], v[1], v[2], centre, reach, eps);
@@ -1354,21 +1383,11 @@ void sideCases(long count, uint32_t seed, SideStats& st) {
         }
     };
     for (long c = 0; c < count; ++c) {
-        const int family = int(c % 5);
-        const double offset = family == 3 ? 1e4 : 0.0;
-        dvec3 v[3] = {vec(), vec(), vec()};
-        if (family == 1) v[2] = v[0] + 1e-6 * vec();
-        if (family == 2) for (auto& x : v) x *= 1e-3;
-        const double radius = std::pow(10.0, -4.0 + 4.0 * zero_one(rng));
-        dvec3 centre = dvec3(0.0, 0.0, 3.0) + vec();
-        if (family == 4) {  // the light touching or straddling T's plane, beside T or over it
-            const dvec3 n = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
-            const dvec3 w(zero_one(rng), zero_one(rng), zero_one(rng));
-            const dvec3 foot = (c / 5) % 2 == 0 ? v[0] + 2.0 * vec() : (w.x * v[0] + w.y * v[1] + w.z * v[2]) / (w.x + w.y + w.z);
-            centre = foot + n * radius * (zero_one(rng) < 0.5 ? 0.5 : 1.0 + 1e-9);
-        }
-        for (auto& x : v) x = dvec3(glm::vec3(x + offset));
-        centre += offset;
+        const CasterCase k = casterCase(c, rng, true);
+        const int family = k.family;
+        const dvec3* v = k.v;
+        const dvec3 centre = k.centre;
+        const double radius = k.radius;
         penumbra::reference::VisibilityOptions options;
         options.tie_epsilon = c % 3 == 0 ? 1e-7 : 1e-9;
         options.coplanar_epsilon = c % 2 == 0 ? 1e-9 : 2e-5;
