@@ -138,6 +138,26 @@ struct Case {
 namespace {
 
 /// Every mode on every case: N = 128, and 1024 on the torus knot (on every case when `all_1024`).
+/// A light grid over the receivers' box grown by `pad` (the casters need not lie inside its
+/// frustum), grid x grid texels, its far plane just beyond every receiver.
+struct ReceiverGrid {
+    glm::mat4 vp;
+    penumbra::InfluenceRegionSetup influence;
+};
+ReceiverGrid receiverGrid(const std::vector<glm::vec3>& points, const penumbra::Light& light, uint32_t grid, float pad) {
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (const auto& p : points) lo = glm::min(lo, p - pad), hi = glm::max(hi, p + pad);
+    ReceiverGrid g;
+    g.vp = penumbra::lightViewProjectionForBounds(glm::vec4(glm::vec3(light.center), 1.0f), lo, hi);
+    double far_depth = 0.0;
+    for (const auto& p : points) far_depth = std::max(far_depth, double((g.vp * glm::vec4(p, 1.0f)).w));
+    penumbra::InfluenceRegionOptions io;
+    io.grid_width = io.grid_height = grid;
+    io.far_plane = penumbra::influenceFarPlaneAtDepth(g.vp, far_depth * 1.01 + 1e-3);
+    g.influence = penumbra::influenceRegionSetup(light, g.vp, io);
+    return g;
+}
+
 void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all_1024) {
     penumbra::test::context();
     const uint32_t seed = penumbra::test::testSeed();
@@ -168,17 +188,10 @@ void checkScenes(const std::vector<Case>& cases, size_t receiver_count, bool all
             const penumbra::gl::Buffer sets_buffer = penumbra::gl::Buffer::fromVector(receiver_sets);
             const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
 
-            // The light grid from the light centre over the scene; far plane beyond every receiver.
-            // (The receivers' box: the casters need not lie inside the grid's frustum.)
-            glm::vec3 lo(1e30f), hi(-1e30f);
-            for (const auto& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);
-            const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(c.scene.light.position, 1.0f), lo, hi);
-            double far_depth = 0.0;
-            for (const auto& p : points) far_depth = std::max(far_depth, double((vp * glm::vec4(p, 1.0f)).w));
-            penumbra::InfluenceRegionOptions io;
-            io.grid_width = io.grid_height = 64;
-            io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
-            const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+            // The light grid from the light centre over the receivers; far plane beyond every one.
+            const ReceiverGrid receiver_grid = receiverGrid(points, light, 64, 0.0f);
+            const glm::mat4& vp = receiver_grid.vp;
+            const penumbra::InfluenceRegionSetup& influence = receiver_grid.influence;
 
             // The oracle on the same float receivers and the same world samples (per set).
             std::vector<dvec3> mesh_d(mesh.positions.begin(), mesh.positions.end());
@@ -697,16 +710,10 @@ TEST_CASE("SoftSkips::closed_casters: a culled face's bits through the second pa
     const CertifiedLut certified(sets, 32);
     const penumbra::LightLutSetup& lut = certified.lut;
     const penumbra::BufferRange lut_table = certified.table();
-    // The light grid over the receivers (the casters need not lie inside its frustum).
-    glm::vec3 r_lo(1e30f), r_hi(-1e30f);
-    for (const auto& p : points) r_lo = glm::min(r_lo, p - 0.01f), r_hi = glm::max(r_hi, p + 0.01f);
-    const glm::mat4 vp = penumbra::lightViewProjectionForBounds(glm::vec4(glm::vec3(light.center), 1.0f), r_lo, r_hi);
-    double far_depth = 0.0;
-    for (const auto& p : points) far_depth = std::max(far_depth, double((vp * glm::vec4(p, 1.0f)).w));
-    penumbra::InfluenceRegionOptions io;
-    io.grid_width = io.grid_height = 16;
-    io.far_plane = penumbra::influenceFarPlaneAtDepth(vp, far_depth * 1.01 + 1e-3);
-    const penumbra::InfluenceRegionSetup influence = penumbra::influenceRegionSetup(light, vp, io);
+    // The light grid over the receivers, grown by 0.01 (they lie on its box otherwise).
+    const ReceiverGrid receiver_grid = receiverGrid(points, light, 16, 0.01f);
+    const glm::mat4& vp = receiver_grid.vp;
+    const penumbra::InfluenceRegionSetup& influence = receiver_grid.influence;
     std::vector<glm::vec4> positions4;
     for (const auto& p : points) positions4.emplace_back(p, 1.0f);
     const penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(positions4);
