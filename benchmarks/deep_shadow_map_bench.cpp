@@ -31,7 +31,12 @@
 //       ratio = depth_map_bytes / bytes_level0,
 //       err_linf (max over every texel of dsmFunctionDistance(uncompressed, compressed), double;
 //       must be <= eps), err_linf_over_eps, eps, fragments, resolution. A texel over eps is also
-//       printed to stderr (texel, eps, distance, vertex counts).
+//       printed to stderr (texel, eps, distance, vertex counts). vertices_lower_bound: the sum of
+//       dsmVerticesLowerBound over the texels (no function within eps of each texel's has fewer
+//       vertices, wherever it puts them); ratio_upper_bound: depth_map_bytes over what that many
+//       vertices would take in this storage (counts padded to even): no map in this format can
+//       beat it; bound_over_compressor: texels where the bound exceeds the compressor's count
+//       (must be 0).
 //   BM_DsmBuildFragments/<R>/<S>, BM_DsmMergeCompress/<R>/<S>, BM_DsmMips/<R>/<S>   hairball,
 //       R in {64, 128, 256}, S in {16, 64}, eps = 1 / (2 S) (the default). BuildFragments:
 //       buildDsmFragmentsCpu (rasterization + sort); MergeCompress: level 0 (merge + compression);
@@ -372,6 +377,17 @@ void compressionTable(benchmark::State& state, const std::string& scene, uint32_
                      map.offsets[0][worst_texel + 1] - map.offsets[0][worst_texel]);
     const double bytes = static_cast<double>(levelBytes(map, 0));
     const double depth_map_bytes = 4.0 * R * R * S;
+    // The fewest vertices any function within eps of each texel's could have
+    // (dsmVerticesLowerBound), and what they would take in this storage (counts padded to even).
+    uint64_t bound_vertices = 0, bound_stored = 0, bound_over = 0;
+    for (uint32_t t = 0; t < R * R; ++t) {
+        const uint32_t a0 = raw.offsets[0][t], a1 = raw.offsets[0][t + 1];
+        const uint32_t b = penumbra::dsmVerticesLowerBound(raw.vertices[0].data() + F * a0, a1 - a0, setup.channels, 0, eps);
+        bound_vertices += b;
+        bound_stored += b + (b & 1u);
+        bound_over += b > map.offsets[0][t + 1] - map.offsets[0][t];
+    }
+    const double bound_bytes = 4.0 * (double(R) * R + 1) + double(bound_stored) * (4.0 + 2.0 * setup.channels);
     state.counters["resolution"] = R;
     state.counters["eps"] = eps;
     state.counters["fragments"] = static_cast<double>(frags.fragments.size());
@@ -380,6 +396,9 @@ void compressionTable(benchmark::State& state, const std::string& scene, uint32_
     state.counters["bytes_level0"] = bytes;
     state.counters["depth_map_bytes"] = depth_map_bytes;
     state.counters["ratio"] = depth_map_bytes / bytes;
+    state.counters["vertices_lower_bound"] = static_cast<double>(bound_vertices);
+    state.counters["ratio_upper_bound"] = depth_map_bytes / bound_bytes;
+    state.counters["bound_over_compressor"] = static_cast<double>(bound_over);
     state.counters["err_linf"] = worst;
     state.counters["err_linf_over_eps"] = worst / eps;
 }

@@ -1088,6 +1088,141 @@ TEST_CASE("deep shadow map: free segment origins need fewer vertices than lokovi
     CHECK(out[9] == 0.0f);
 }
 
+/// dsmVerticesLowerBound of a grey Input.
+uint32_t verticesLowerBound(const Input& in, double eps) {
+    return penumbra::dsmVerticesLowerBound(in.v.data(), in.count(), 1, 0, eps);
+}
+
+TEST_CASE("deep shadow map: the vertices lower bound is met on known optima and never beats a real approximation") {
+    // Known optima (dsmVisibility's meaning: constant before the first vertex and after the last).
+    const double eps = 1.0 / 64.0;
+    Input none(1);
+    CHECK(verticesLowerBound(none, eps) == 0);
+    CHECK_THROWS_WITH_AS(verticesLowerBound(none, -1.0), doctest::Contains("eps = -1"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(verticesLowerBound(none, std::nan("")), doctest::Contains("eps = nan"), penumbra::Error);
+    CHECK_THROWS_WITH_AS(penumbra::dsmVerticesLowerBound(none.v.data(), 0, 1, 1, eps), doctest::Contains("channel = 1"),
+                         penumbra::Error);
+    Input lit(1);  // within eps of 1 everywhere: the empty function
+    lit.addGrey(1.0, 1.0);
+    lit.addGrey(2.0, 1.0 - 0.5 * eps);
+    CHECK(verticesLowerBound(lit, eps) == 0);
+    Input flat(1);  // one constant that is not 1: one vertex
+    flat.addGrey(1.0, 0.5);
+    flat.addGrey(3.0, 0.5);
+    CHECK(verticesLowerBound(flat, eps) == 1);
+    Input ramp(1);  // a ramp needs both its ends
+    ramp.addGrey(0.0, 1.0);
+    ramp.addGrey(1.0, 0.0);
+    CHECK(verticesLowerBound(ramp, eps) == 2);
+    Input crossing(1);  // a steep drop between two plateaus: its two corners (the ends are constant)
+    crossing.addGrey(0.0, 1.0);
+    crossing.addGrey(1.0, 1.0);
+    crossing.addGrey(1.001, 0.5);
+    crossing.addGrey(2.0, 0.5);
+    CHECK(verticesLowerBound(crossing, eps) == 2);
+    Input layers(1);  // two vertical steps higher than 2 eps: two vertices each
+    layers.addGrey(1.0, 1.0);
+    layers.addGrey(1.0, 0.25);
+    layers.addGrey(3.0, 0.25);
+    layers.addGrey(3.0, 0.0);
+    layers.addGrey(4.0, 0.0);
+    CHECK(verticesLowerBound(layers, eps) == 4);
+    Input stairs(1);  // five steps of 0.1 > 2 eps, plateaus between
+    for (int k = 0; k < 5; ++k) {
+        stairs.addGrey(1.0 + k, 1.0 - 0.1 * k);
+        stairs.addGrey(1.0 + k, 0.9 - 0.1 * k);
+    }
+    CHECK(verticesLowerBound(stairs, eps) == 10);
+    Input small_steps(1);  // the same steps at 2 eps > 0.1: one line through them, then the ends
+    for (int k = 0; k < 5; ++k) {
+        small_steps.addGrey(1.0 + k, 1.0 - 0.1 * k);
+        small_steps.addGrey(1.0 + k, 0.9 - 0.1 * k);
+    }
+    CHECK(verticesLowerBound(small_steps, 0.06) <= 3);
+    CHECK(verticesLowerBound(small_steps, 0.06) >= 2);
+
+    // A bound: never more than the input's own vertices (it is within 0 of itself) nor than the
+    // compressor's output within eps (unpadded: a padded count's last vertex is a copy), on random
+    // step functions and hair-like ones; the aggregate shows how far the compressor is from it.
+    Rng rng(penumbra::test::testSeed(14));
+    for (const float tolerance : {1.0f / 256.0f, 1.0f / 64.0f, 0.1f}) {
+        CAPTURE(tolerance);
+        uint64_t bound = 0, compressed = 0, over = 0, over_input = 0;
+        for (int i = 0; i < 400; ++i) {
+            const Input in = i % 2 ? hairLikeFunction(rng) : randomFunction(rng, 1, i % 3 == 0 ? 1e4 : 0.0);
+            const uint32_t b = verticesLowerBound(in, tolerance);
+            uint32_t count = 0;
+            const std::vector<float> out = runCompressor<1>(tolerance, in.v, count);
+            // The output's own function without the padding copy.
+            uint32_t used = count;
+            if (used >= 2 && out[2 * (used - 1)] == out[2 * (used - 2)] && out[2 * used - 1] == out[2 * used - 3]) --used;
+            bound += b;
+            compressed += used;
+            over += b > used;
+            over_input += b > in.count();
+            // The compressor's output is within eps of the input, so the bound on the input holds
+            // for it too (checked with its own vertices at the same eps: it is its own approximation).
+            CHECK(penumbra::dsmVerticesLowerBound(out.data(), used, 1, 0, 0.0) <= used);
+        }
+        MESSAGE("eps " << tolerance << ": lower bound " << bound << " vertices, compressor " << compressed);
+        CHECK(over == 0);
+        CHECK(over_input == 0);
+        CHECK(bound > 0);
+    }
+
+    // Adversarial: an arbitrary approximation g of m vertices (vertical steps, vertices anywhere),
+    // and an input f built around it — g's own depths and random ones, each value g's plus noise
+    // up to 0.999 eps, with depths on g's constant ends too. f and g are both linear between f's
+    // vertices, so g is within eps of f everywhere, and no bound on f may exceed m.
+    uint64_t cases = 0, tight = 0;
+    for (const double tolerance : {1.0 / 256.0, 1.0 / 64.0, 0.1}) {
+        CAPTURE(tolerance);
+        for (int i = 0; i < 2000; ++i) {
+            std::vector<std::pair<float, double>> g;  // (z, V)
+            const uint32_t m = 1 + rng.below(12);
+            float z = static_cast<float>(rng.uniform(-1.0, 1.0));
+            double v = rng.uniform(0.0, 1.0) < 0.5 ? 1.0 : rng.uniform(0.2, 1.0);
+            for (uint32_t k = 0; k < m; ++k) {
+                if (k > 0 && rng.below(4) != 0) z += static_cast<float>(rng.uniform(1e-3, 0.5));  // else a vertical step
+                if (k > 0) v = std::max(0.0, v - rng.uniform(0.0, rng.below(2) ? 2.0 * tolerance : 0.4));
+                g.push_back({z, v});
+            }
+            const auto gAt = [&](double at) {  // g between its vertices (at strictly inside a segment)
+                for (size_t k = 1; k < g.size(); ++k)
+                    if (at < g[k].first)
+                        return g[k - 1].second + (g[k].second - g[k - 1].second) * (at - g[k - 1].first) / (g[k].first - g[k - 1].first);
+                return g.back().second;
+            };
+            const auto noisy = [&](double value) { return value + rng.uniform(-0.999, 0.999) * tolerance; };
+            Input f(1);
+            const uint32_t before = rng.below(3);
+            for (uint32_t j = before; j > 0; --j) f.addGrey(g.front().first - 0.25f * j, noisy(g.front().second));
+            for (size_t k = 0; k < g.size(); ++k) {
+                f.addGrey(g[k].first, noisy(g[k].second));
+                if (k + 1 < g.size() && g[k + 1].first > g[k].first) {
+                    const uint32_t extra = rng.below(5);
+                    std::vector<float> at;
+                    for (uint32_t j = 0; j < extra; ++j) {
+                        const float t = static_cast<float>(rng.uniform(g[k].first, g[k + 1].first));
+                        if (t > g[k].first && t < g[k + 1].first) at.push_back(t);
+                    }
+                    std::sort(at.begin(), at.end());
+                    for (const float t : at) f.addGrey(t, noisy(gAt(t)));
+                }
+            }
+            const uint32_t after = rng.below(3);
+            for (uint32_t j = 1; j <= after; ++j) f.addGrey(g.back().first + 0.25f * j, noisy(g.back().second));
+            // The bound assumes the empty function reads 1: an f without vertices is not generated.
+            const uint32_t b = verticesLowerBound(f, tolerance);
+            INFO("case " << i << ": g of " << m << " vertices, f of " << f.count() << ", bound " << b);
+            CHECK(b <= m);
+            ++cases;
+            tight += b == m;
+        }
+    }
+    MESSAGE(cases << " adversarial approximations: the bound met their vertex count in " << tight);
+}
+
 TEST_CASE("deep shadow map: merge of one quad over the whole image, exact values and left continuity") {
     const DsmSetup setup = makeSetup(8, 16);
     const DsmLight light = orthoLight();

@@ -1263,6 +1263,236 @@ inline double dsmFunctionDistance(const float* a, uint32_t na, const float* b, u
     return worst;
 }
 
+namespace detail {
+
+/// One depth of a texel function: its value just before (left) and just after (right) z (a step
+/// has several vertices at one z: the first is the left limit, the last the right one).
+struct DsmDepthLimits {
+    double z, left, right;
+};
+
+/// A convex polygon in the plane of (b, c): a line's values at z0 (b) and z1 (c). Half-plane
+/// clipping keeps the lines whose value at relative depth s = (z - z0) / (z1 - z0) lies in
+/// [lo, hi]; `slack` widens every test (rounding may only keep lines, never drop them).
+struct DsmLinePolygon {
+    std::vector<glm::dvec2> points, scratch;
+    void rectangle(double b_lo, double b_hi, double c_lo, double c_hi) {
+        points.assign({{b_lo, c_lo}, {b_hi, c_lo}, {b_hi, c_hi}, {b_lo, c_hi}});
+    }
+    bool empty() const { return points.empty(); }
+    /// Keeps the points where (1 - s) b + s c >= lo (sign = 1) or <= hi (sign = -1).
+    void clipSide(double s, double bound, double sign, double slack) {
+        scratch.clear();
+        const size_t n = points.size();
+        for (size_t i = 0; i < n; ++i) {
+            const glm::dvec2& p = points[i];
+            const glm::dvec2& q = points[(i + 1) % n];
+            const double dp = sign * ((1.0 - s) * p.x + s * p.y - bound) + slack;
+            const double dq = sign * ((1.0 - s) * q.x + s * q.y - bound) + slack;
+            if (dp >= 0.0) scratch.push_back(p);
+            if ((dp >= 0.0) != (dq >= 0.0)) scratch.push_back(p + (q - p) * (dp / (dp - dq)));
+        }
+        points.swap(scratch);
+    }
+    void clip(double s, double lo, double hi, double slack) {
+        clipSide(s, lo, 1.0, slack);
+        if (!points.empty()) clipSide(s, hi, -1.0, slack);
+    }
+};
+
+}  // namespace detail
+
+/// A lower bound on the vertices of any function (dsmVisibility's meaning: linear between
+/// vertices, constant before the first and after the last, vertical steps as vertices sharing a
+/// depth) within `eps` of texel function (v, n) at every depth, both one-sided limits (channel
+/// `channel` of `channels`). No compressor, whatever depths it puts its vertices at, can do with
+/// fewer; the benchmark sets it beside DsmCompressor's count (BM_DsmCompressionTable).
+///
+/// The argument (after Imai & Iri's tube view of L-infinity approximation): the function's eps-tube
+/// over [first depth, last depth] must be crossed by the pieces of the approximation, one line
+/// each. Greedily, the first line reaches at most z_1 = the farthest any line within the tube from
+/// the start gets; any piece that goes on past z_k crosses the tube's cross-section at z_k, so it
+/// ends at most where the farthest line from that whole cross-section ends (z_{k+1}). The k-th
+/// piece of any approximation therefore ends at or before z_k, and covering the tube takes at least
+/// as many pieces as the greedy. Reaches are computed in double with the tube widened by 1e-9
+/// (rounding can only lengthen them, which keeps the bound a bound). v vertices make v - 1
+/// segments and two constant ends, which are horizontal: the greedy is also run with a horizontal
+/// first piece and up to the start of the longest horizontal last piece, and the smallest of the
+/// four cases is taken. A step higher than 2 eps needs a vertical segment of its own at its depth
+/// (one vertex more each). Loose where the function bends often within its tube: the greedy lets
+/// each line start anywhere on the previous one's end cross-section (tests/deep_shadow_map_test.cpp
+/// checks it on known optima and against arbitrary approximations). Throws penumbra::Error for
+/// eps < 0 or not finite, or channel >= channels; (v, n) as dsmFunctionDistance's (finite values).
+inline uint32_t dsmVerticesLowerBound(const float* v, uint32_t n, uint32_t channels, uint32_t channel, double eps) {
+    PENUMBRA_CHECK(std::isfinite(eps) && eps >= 0.0, "penumbra::dsmVerticesLowerBound: eps = ", eps,
+                   " must be finite and >= 0");
+    PENUMBRA_CHECK(channel < channels, "penumbra::dsmVerticesLowerBound: channel = ", channel, " must be < channels = ", channels);
+    if (n == 0) return 0;
+    const uint32_t F = 1 + channels;
+    const double e = eps + 1e-9, slack = 1e-12;
+    std::vector<detail::DsmDepthLimits> d;
+    for (uint32_t i = 0; i < n; ++i) {
+        const double z = v[F * i], value = v[F * i + 1 + channel];
+        if (!d.empty() && d.back().z == z) d.back().right = value;
+        else d.push_back({z, value, value});
+    }
+    // The whole function within eps of one constant: one horizontal line (0 vertices when it is 1,
+    // else 1) — the four cases below assume at least two pieces.
+    double all_lo = -1e300, all_hi = 1e300;
+    for (const detail::DsmDepthLimits& q : d) {
+        all_lo = std::max({all_lo, q.left - e, q.right - e});
+        all_hi = std::min({all_hi, q.left + e, q.right + e});
+    }
+    if (all_lo <= all_hi) return all_lo <= 1.0 && 1.0 <= all_hi ? 0u : 1u;
+    const double z_first = d.front().z, z_last = d.back().z;
+    // The tube's value at depth t (between depth entries: linear from the right limit of one to the
+    // left limit of the next).
+    const auto valueAt = [&](size_t k, double t) {  // t in (d[k - 1].z, d[k].z)
+        const double a = d[k - 1].right, b = d[k].left;
+        return a + (b - a) * ((t - d[k - 1].z) / (d[k].z - d[k - 1].z));
+    };
+    detail::DsmLinePolygon poly, probe;
+    // The farthest depth any line from cross-section [lo, hi] at z0 reaches within the tube
+    // (horizontal: constant lines only). next: the first entry deeper than z0. Returns the reach and
+    // sets `at_entry` to the entry it ends exactly at (or d.size() when it ends between entries).
+    const auto reach = [&](double z0, double lo, double hi, size_t next, bool horizontal, size_t& at_entry) {
+        at_entry = d.size();
+        if (next >= d.size()) return std::numeric_limits<double>::infinity();
+        if (horizontal) {
+            for (size_t k = next; k < d.size(); ++k) {
+                const double l_lo = std::max(lo, d[k].left - e), l_hi = std::min(hi, d[k].left + e);
+                if (l_lo > l_hi) {
+                    // Ends between entries k - 1 and k (or at z0's own segment): the tube's value
+                    // moves linearly from the previous depth's right limit to d[k].left.
+                    double t_lo = k > next ? d[k - 1].z : z0, t_hi = d[k].z;
+                    for (int it = 0; it < 60; ++it) {
+                        const double t = 0.5 * (t_lo + t_hi);
+                        const double w = k > 0 ? valueAt(k, t) : d[k].left;
+                        (std::max(lo, w - e) <= std::min(hi, w + e) ? t_lo : t_hi) = t;
+                    }
+                    return t_hi;
+                }
+                lo = std::max(l_lo, d[k].right - e);
+                hi = std::min(l_hi, d[k].right + e);
+                if (lo > hi) {
+                    at_entry = k;
+                    return d[k].z;
+                }
+            }
+            return std::numeric_limits<double>::infinity();
+        }
+        const double z1 = d[next].z;
+        poly.rectangle(lo, hi, d[next].left - e, d[next].left + e);  // every such line reaches z1
+        poly.clip(1.0, d[next].right - e, d[next].right + e, slack);
+        if (poly.empty()) {
+            at_entry = next;
+            return z1;
+        }
+        for (size_t k = next + 1; k < d.size(); ++k) {
+            const double s = (d[k].z - z0) / (z1 - z0);
+            probe.points = poly.points;
+            probe.clip(s, d[k].left - e, d[k].left + e, slack);
+            if (probe.empty()) {
+                double t_lo = d[k - 1].z, t_hi = d[k].z;
+                for (int it = 0; it < 60; ++it) {
+                    const double t = 0.5 * (t_lo + t_hi), w = valueAt(k, t);
+                    probe.points = poly.points;
+                    probe.clip((t - z0) / (z1 - z0), w - e, w + e, slack);
+                    (probe.empty() ? t_hi : t_lo) = t;
+                }
+                return t_hi;
+            }
+            probe.clip(s, d[k].right - e, d[k].right + e, slack);
+            if (probe.empty()) {
+                at_entry = k;
+                return d[k].z;
+            }
+            poly.points.swap(probe.points);
+        }
+        return std::numeric_limits<double>::infinity();
+    };
+    // Pieces needed to cover [z_first, target] (0 when target <= z_first); kNever: a horizontal
+    // first piece cannot start.
+    constexpr uint32_t kNever = 1u << 30;
+    const auto pieces = [&](double target, bool horizontal_first) {
+        double z0 = z_first, lo = d[0].right - e, hi = d[0].right + e;
+        if (horizontal_first) {
+            // The constant before the first vertex: within eps of the function before z_first
+            // (its first value) and just after it.
+            lo = std::max(lo, d[0].left - e);
+            hi = std::min(hi, d[0].left + e);
+            if (lo > hi) return kNever;
+        }
+        if (target <= z_first) return 0u;
+        size_t next = 1;
+        for (uint32_t count = 1;; ++count) {
+            size_t at = 0;
+            const double t = reach(z0, lo, hi, next, horizontal_first && count == 1, at);
+            if (t >= target) return count;
+            // The next piece crosses the cross-section just past t (the right limit at an entry).
+            if (at < d.size()) {
+                z0 = d[at].z;
+                lo = d[at].right - e;
+                hi = d[at].right + e;
+                next = at + 1;
+            } else {
+                size_t k = next;
+                while (k < d.size() && d[k].z <= t) ++k;
+                if (k >= d.size()) return count;  // t rounded onto the last entry
+                if (k > 0 && d[k - 1].z == t) {
+                    z0 = t;
+                    lo = d[k - 1].right - e;
+                    hi = d[k - 1].right + e;
+                } else {
+                    const double w = valueAt(k, t);
+                    z0 = t;
+                    lo = w - e;
+                    hi = w + e;
+                }
+                next = k;
+            }
+        }
+    };
+    // The earliest start z_h of a horizontal last piece (a constant within the tube from z_h on;
+    // at z_h itself only the right limit counts). Rounded down where it falls between entries: a
+    // smaller z_h only weakens the bound.
+    double z_h = z_last;
+    {
+        double lo = d.back().right - e, hi = d.back().right + e;
+        for (size_t k = d.size() - 1; k > 0; --k) {
+            const double l_lo = std::max(lo, d[k].left - e), l_hi = std::min(hi, d[k].left + e);
+            if (l_lo > l_hi) break;  // starts at d[k].z, after its step
+            const double r_lo = std::max(l_lo, d[k - 1].right - e), r_hi = std::min(l_hi, d[k - 1].right + e);
+            if (r_lo > r_hi) {
+                // Starts inside (d[k - 1].z, d[k].z): the tube there is linear, so a constant that
+                // fits at t and at d[k].z fits between.
+                double t_lo = d[k - 1].z, t_hi = d[k].z;  // fits from t_hi, not from t_lo
+                for (int it = 0; it < 60; ++it) {
+                    const double t = 0.5 * (t_lo + t_hi), w = valueAt(k, t);
+                    (std::max(l_lo, w - e) <= std::min(l_hi, w + e) ? t_hi : t_lo) = t;
+                }
+                z_h = t_lo;
+                break;
+            }
+            lo = r_lo;
+            hi = r_hi;
+            z_h = d[k - 1].z;
+        }
+    }
+    // A step higher than 2 eps cannot be passed by a continuous approximation: it needs a vertical
+    // segment of its own, at that very depth (its two vertices share it).
+    uint32_t jumps = 0;
+    for (const detail::DsmDepthLimits& q : d) jumps += std::fabs(q.left - q.right) > 2.0 * e;
+    // v vertices make v - 1 segments, `jumps` of them (at least) vertical, and two horizontal
+    // constant ends; the non-vertical pieces inside [z_first, z_last] are at least the greedy's.
+    // Which ends lie inside:
+    const uint32_t neither = pieces(z_last, false) + 1;  // none: segments cover it all
+    const uint32_t first = pieces(z_last, true);          // the first end, then segments
+    const uint32_t last = pieces(z_h, false) + 1;         // segments cover [z_first, z_h]
+    const uint32_t both = pieces(z_h, true);              // the first end, then segments up to z_h
+    return std::min({neither, first, last, both}) + jumps;
+}
+
 /// A function is non-increasing in V and non-decreasing in z (every channel).
 inline bool dsmMonotone(const float* v, uint32_t n, uint32_t channels) {
     const uint32_t F = 1 + channels;
