@@ -85,6 +85,11 @@
 //                                    err_visibility_rmse_n1024, err_visibility_rmse_n1024_ours);
 //                                    pcss_rmse_over_ours (n1024 figures) and pcss_time_over_ours =
 //                                    ms / ms_ours: its error relative to ours, and at what time.
+//   BM_Pcss/equal_time               PCSS given our time: per map size (map_size, 2x, 4x) the taps
+//                                    grow by sqrt(2) steps (up to 128x) until one run takes at least
+//                                    ours; the configuration closest to the proxy is timed against
+//                                    ours with BM_Pcss's counters (map_size, blocker_taps,
+//                                    filter_taps: the one chosen).
 // Sizes: W x H = 128 x 96, G = 256, maps 1024^2, 3 iterations (llvmpipe: one exact run at N = 1024
 // takes ~10 s). Smoke runs (PENUMBRA_BENCH_SMOKE=1):
 // 32 x 24, G = 32, tessellation 8, R = 32, maps 128^2, N = 128 only (1024 in the scaling entry),
@@ -116,6 +121,7 @@
 #include <cstdlib>
 #include <exception>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -133,6 +139,7 @@ constexpr uint32_t kSampleSeed = 2008u;
 constexpr float kLift = 1e-6f;  // view samples' normal offset, relative to the scene's box diagonal
 constexpr uint32_t kBaselineSamples = 256;  // BM_ShadowMapsAveraged/256, BM_Pcss
 constexpr uint32_t kPcssBlockerTaps = 32, kPcssFilterTaps = 64;
+constexpr int kPcssMaxTapSteps = 14;  // BM_Pcss/equal_time: taps up to 128x (sqrt(2) steps)
 
 struct Sizes {
     uint32_t width, height, grid, lut_resolution, map_size, tessellation;
@@ -601,8 +608,17 @@ void BM_ShadowMapsAveraged(benchmark::State& state, uint32_t map_size) {
     }
 }
 
-/// PCSS from one map at the light's centre; ours timed with it.
-void BM_Pcss(benchmark::State& state) {
+/// One PCSS configuration: map size and taps.
+struct PcssConfig {
+    uint32_t map = 0, blocker = 0, filter = 0;
+};
+
+/// BM_Pcss: PCSS from one map at the light's centre (map_size, 32 blocker and 64 filter taps);
+/// ours timed with it. BM_Pcss/equal_time (`equal_time`): PCSS given our time. Per map size
+/// (map_size, 2x, 4x) its taps grow by sqrt(2) steps from (32, 64) until one run takes at least
+/// ours (medians of 3, after a warm-up); of those configurations, the one closest to the
+/// continuous-light proxy is timed against ours the same way.
+void BM_Pcss(benchmark::State& state, bool equal_time) {
     if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
@@ -611,12 +627,37 @@ void BM_Pcss(benchmark::State& state) {
         const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
         // The continuous-light proxy: another, denser sample set (seed + 1, N = 1024).
         const LightConfig& proxy = lightConfig(tessellation, 100, 1024, kSampleSeed + 1);
-        const penumbra::bench::Pcss pcss(*v.gpu, v.lifted, v.count, v.scene.light.position,
-                                         float(c.light.size.x), v.lo, v.hi, sizes().map_size, kPcssBlockerTaps,
-                                         kPcssFilterTaps);
         Ours ours(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
+        const auto makePcss = [&](const PcssConfig& k) {
+            return std::make_unique<penumbra::bench::Pcss>(*v.gpu, v.lifted, v.count, v.scene.light.position,
+                                                           float(c.light.size.x), v.lo, v.hi, k.map, k.blocker, k.filter);
+        };
+        PcssConfig config{sizes().map_size, kPcssBlockerTaps, kPcssFilterTaps};
+        if (equal_time) {
+            const auto medianMs = [](const std::function<void()>& run) {
+                penumbra::bench::timeGpu(run);
+                std::vector<double> ms;
+                for (int i = 0; i < 3; ++i) ms.push_back(1e3 * penumbra::bench::timeGpu(run));
+                return penumbra::bench::median(ms);
+            };
+            const double ours_ms = medianMs([&ours] { ours.run(); });
+            double best_rmse = std::numeric_limits<double>::infinity();
+            for (const uint32_t map : {sizes().map_size, 2 * sizes().map_size, 4 * sizes().map_size}) {
+                for (int step = 0; step <= kPcssMaxTapSteps; ++step) {
+                    const double scale = std::pow(2.0, 0.5 * step);
+                    const PcssConfig k{map, uint32_t(std::lround(kPcssBlockerTaps * scale)),
+                                       uint32_t(std::lround(kPcssFilterTaps * scale))};
+                    const auto pcss = makePcss(k);
+                    if (medianMs([&pcss] { pcss->run(); }) < ours_ms && step < kPcssMaxTapSteps) continue;
+                    const double rmse = compareWithOracle(v, proxy.truth, {}, 0, pcss->readVisibility()).rmse;
+                    if (rmse < best_rmse) best_rmse = rmse, config = k;
+                    break;
+                }
+            }
+        }
+        const auto pcss = makePcss(config);
         std::vector<Method> methods;
-        methods.push_back({"", [&pcss] { pcss.run(); }});
+        methods.push_back({"", [&pcss] { pcss->run(); }});
         methods.push_back({"ours", [&ours] { ours.run(); }});
         const bool q = timeMethods(state, methods);
         gl::checkErrors("sample_based_soft_bench");
@@ -624,7 +665,7 @@ void BM_Pcss(benchmark::State& state) {
             state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
             return;
         }
-        const std::vector<float> pcss_visibility = pcss.readVisibility();
+        const std::vector<float> pcss_visibility = pcss->readVisibility();
         const Errors e_pcss = compareWithOracle(v, c.truth, {}, 0, pcss_visibility);
         const Errors e_ours = compareOurs(ours, c.truth);
         const Errors p_pcss = compareWithOracle(v, proxy.truth, {}, 0, pcss_visibility);
@@ -636,9 +677,9 @@ void BM_Pcss(benchmark::State& state) {
         state.counters["err_visibility_rmse_n1024_ours"] = p_ours.rmse;
         state.counters["pcss_rmse_over_ours"] = ratio(p_pcss.rmse, p_ours.rmse);
         state.counters["pcss_time_over_ours"] = ratio(methods[0].ms(q), methods[1].ms(q));
-        state.counters["map_size"] = double(pcss.mapSize());
-        state.counters["blocker_taps"] = double(kPcssBlockerTaps);
-        state.counters["filter_taps"] = double(kPcssFilterTaps);
+        state.counters["map_size"] = double(pcss->mapSize());
+        state.counters["blocker_taps"] = double(config.blocker);
+        state.counters["filter_taps"] = double(config.filter);
         setScene(state, v, kBaselineSamples);
         leaveNoBindings();
     } catch (const std::exception& e) {
@@ -675,7 +716,8 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
         const std::string name = maps_name + "/map:" + std::to_string(size);
         configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) { BM_ShadowMapsAveraged(s, size); }));
     }
-    configure(benchmark::RegisterBenchmark("BM_Pcss", BM_Pcss));
+    configure(benchmark::RegisterBenchmark("BM_Pcss", [](benchmark::State& s) { BM_Pcss(s, false); }));
+    configure(benchmark::RegisterBenchmark("BM_Pcss/equal_time", [](benchmark::State& s) { BM_Pcss(s, true); }));
     for (const uint32_t t : tessellations()) {
         const std::string name = "BM_SoftShadowsTriangles/" + std::to_string(t);
         configure(benchmark::RegisterBenchmark(name.c_str(),
