@@ -60,6 +60,11 @@
 //   BM_SoftShadowsNScaling           exact and lut at N = 128 and 1024, all four interleaved:
 //                                    n1024_over_n128 = ms_exact_n1024 / ms (exact at 128; target
 //                                    <= 1.5, the seed's Fig. 13 ~2), n1024_over_n128_lut.
+//   BM_SoftShadowsCoverage           exact and lut at N = 256, each with the coverage pass
+//                                    (SampleBasedSoftGpuOptions::coverage_texels, the default) and
+//                                    with every influence region drawn (_drawn, coverage_texels = 0),
+//                                    all four interleaved: coverage_speedup = ms_drawn / ms,
+//                                    coverage_speedup_lut = ms_lut_drawn / ms_lut.
 //   BM_SoftShadowsRadius/<percent>   exact, N = 256, the light radius at 10 ... 400 % of the
 //                                    scene's (sintorn2008 Fig. 12).
 //   BM_SoftShadowsTriangles/<tess>   exact, N = 128, torusKnot(tess): 2 tess^2 + 2 triangles
@@ -367,8 +372,9 @@ struct Ours {
     penumbra::SampleBasedSoftShadows::DrawCasters draw;
     bool ok = true;
 
-    static penumbra::SampleBasedSoftGpuOptions options(SoftMode mode, bool count_work) {
+    static penumbra::SampleBasedSoftGpuOptions options(SoftMode mode, bool count_work, uint32_t coverage_texels) {
         penumbra::SampleBasedSoftGpuOptions o;
+        o.coverage_texels = coverage_texels;
         o.mode = mode;
         o.grid_width = o.grid_height = sizes().grid;
         o.max_list_blocks = 256;  // lists up to 4096 samples (the ground seen at a grazing angle)
@@ -383,9 +389,10 @@ struct Ours {
         o.deferred_triangles = 1u << 18;
         return o;
     }
-    Ours(const View& view, const LightConfig& c, const Lut& lut, SoftMode m, bool count_work)
+    Ours(const View& view, const LightConfig& c, const Lut& lut, SoftMode m, bool count_work,
+         uint32_t coverage_texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels)
         : v(view), l(lut), mode(m),
-          pipeline(options(m, count_work), c.sets, m == SoftMode::Brute ? nullptr : &lut.setup, c.influence, c.view_projection),
+          pipeline(options(m, count_work, coverage_texels), c.sets, m == SoftMode::Brute ? nullptr : &lut.setup, c.influence, c.view_projection),
           input(view.input()),
           table(m == SoftMode::Brute ? penumbra::BufferRange{} : penumbra::BufferRange{lut.table.id(), 0, lut.table.size()}),
           draw([&view](penumbra::CasterClass c) { view.gpu->drawClass(c == penumbra::CasterClass::Closed); }) {
@@ -489,6 +496,27 @@ bool timeMethods(benchmark::State& state, std::vector<Method>& methods) {
     return query_measures;
 }
 
+/// Pipelines timed interleaved (the first one's counters unsuffixed, the others' ms_<name>), each
+/// one's errors against the oracle of its light (err_*_<name>): the methods' times, or empty (the
+/// entry skipped) when a run returned an error.
+std::vector<double> timeOurs(benchmark::State& state, const std::vector<std::pair<std::string, Ours*>>& ours,
+                             const std::vector<const ref::VisibilityResult*>& truths) {
+    std::vector<Method> methods;
+    for (const auto& [name, o] : ours) methods.push_back({name, [o = o] { o->run(); }});
+    const bool q = timeMethods(state, methods);
+    gl::checkErrors("sample_based_soft_bench");
+    std::vector<double> ms;
+    for (size_t i = 0; i < ours.size(); ++i) {
+        if (!ours[i].second->ok) {
+            state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
+            return {};
+        }
+        setErrors(state, compareOurs(*ours[i].second, *truths[i]), ours[i].first.empty() ? "" : "_" + ours[i].first);
+        ms.push_back(methods[i].ms(q));
+    }
+    return ms;
+}
+
 double ratio(double a, double b) { return b > 0.0 ? a / b : 0.0; }
 
 void leaveNoBindings() {
@@ -542,24 +570,39 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
         Ours exact1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Exact, false);
         Ours lut128(v, c128, lut(c128.sets, c128.tolerance), SoftMode::Lut, false);
         Ours lut1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Lut, false);
-        std::vector<Method> methods;
-        methods.push_back({"", [&] { exact128.run(); }});
-        methods.push_back({"exact_n1024", [&] { exact1024.run(); }});
-        methods.push_back({"lut_n128", [&] { lut128.run(); }});
-        methods.push_back({"lut_n1024", [&] { lut1024.run(); }});
-        const bool q = timeMethods(state, methods);
-        gl::checkErrors("sample_based_soft_bench");
-        if (!(exact128.ok && exact1024.ok && lut128.ok && lut1024.ok)) {
-            state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
-            return;
-        }
-        state.counters["n1024_over_n128"] = ratio(methods[1].ms(q), methods[0].ms(q));
-        state.counters["n1024_over_n128_lut"] = ratio(methods[3].ms(q), methods[2].ms(q));
-        setErrors(state, compareOurs(exact128, c128.truth));
-        setErrors(state, compareOurs(exact1024, c1024.truth), "_exact_n1024");
-        setErrors(state, compareOurs(lut128, c128.truth), "_lut_n128");
-        setErrors(state, compareOurs(lut1024, c1024.truth), "_lut_n1024");
+        const std::vector<double> ms = timeOurs(
+            state, {{"", &exact128}, {"exact_n1024", &exact1024}, {"lut_n128", &lut128}, {"lut_n1024", &lut1024}},
+            {&c128.truth, &c1024.truth, &c128.truth, &c1024.truth});
+        if (ms.empty()) return;
+        state.counters["n1024_over_n128"] = ratio(ms[1], ms[0]);
+        state.counters["n1024_over_n128_lut"] = ratio(ms[3], ms[2]);
         setScene(state, v, 128);
+        leaveNoBindings();
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+    }
+}
+
+/// SampleBasedSoftGpuOptions::coverage_texels: the small regions covered by the coverage pass
+/// (the default) against every region drawn, exact and lut at N = 256, interleaved.
+void BM_SoftShadowsCoverage(benchmark::State& state) {
+    if (sizesRejected(state)) return;
+    penumbra::bench::glContext();
+    try {
+        const uint32_t tessellation = sizes().tessellation;
+        const View& v = view(tessellation);
+        const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
+        Ours covered(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
+        Ours drawn(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false, 0);
+        Ours covered_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
+        Ours drawn_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false, 0);
+        const std::vector<double> ms = timeOurs(
+            state, {{"", &covered}, {"drawn", &drawn}, {"lut", &covered_lut}, {"lut_drawn", &drawn_lut}},
+            {&c.truth, &c.truth, &c.truth, &c.truth});
+        if (ms.empty()) return;
+        state.counters["coverage_speedup"] = ratio(ms[1], ms[0]);
+        state.counters["coverage_speedup_lut"] = ratio(ms[3], ms[2]);
+        setScene(state, v, kBaselineSamples);
         leaveNoBindings();
     } catch (const std::exception& e) {
         state.SkipWithError(e.what());
@@ -703,6 +746,7 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
         }
     }
     configure(benchmark::RegisterBenchmark("BM_SoftShadowsNScaling", BM_SoftShadowsNScaling));
+    configure(benchmark::RegisterBenchmark("BM_SoftShadowsCoverage", BM_SoftShadowsCoverage));
     for (const uint32_t percent : radiusPercents()) {
         const std::string name = "BM_SoftShadowsRadius/" + std::to_string(percent);
         configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) {

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -215,6 +216,10 @@ struct Stats {
     long families[7] = {0, 0, 0, 0, 0, 0, 0};
     double max_excursion = -1e300;  // px outside the undilated polygon, over shadowed points
     long sample_checks = 0, sample_inconsistent = 0;
+    // The soft pipeline's coverage pass (influenceCoverageSpan): shadowed receivers outside it, and
+    // texels GL's rule (or a rasterizer snapping to 1/128 px) covers that it does not visit.
+    long coverage_misses = 0, coverage_gl_misses = 0, coverage_checked = 0;
+    double coverage_texels = 0.0, gl_texels = 0.0;
 };
 
 void runCases(long count, uint64_t seed, Stats& st) {
@@ -253,6 +258,13 @@ void runCases(long count, uint64_t seed, Stats& st) {
             ++st.shadowed;
             if (region.kind == InfluenceRegionKind::Dropped) return;  // NaN input only: nothing promised
             const int x = static_cast<int>(std::floor(pix.x)), y = static_cast<int>(std::floor(pix.y));
+            if (region.count > 0) {
+                const glm::ivec2 span = penumbra::influenceCoverageSpan(region.pixels.data(), region.count, y, s.width());
+                if (x < span.x || x > span.y) {
+                    if (++st.coverage_misses <= 5)
+                        MESSAGE("coverage miss: case ", n, " family ", family, " texel (", x, ", ", y, ") span [", span.x, ", ", span.y, "]");
+                }
+            }
             if (!penumbra::influenceRegionCoversTexel(region, x, y)) {
                 if (++st.misses <= 5) {
                     MESSAGE("miss: case ", n, " family ", family, " k ", sides, " cut ", cut, " kind ",
@@ -282,6 +294,55 @@ void runCases(long count, uint64_t seed, Stats& st) {
                 st.max_excursion = std::max(st.max_excursion, ex);
             }
         };
+        // The coverage rule against GL's, every 4th case whose region's box holds at most 2^14
+        // texels (the pass takes boxes of at most coverage_texels, 4096 by default): every texel
+        // GL's rule covers, or leaves within 1/128 px of the boundary (a snapping rasterizer's
+        // choice), is visited.
+        double box_area = 0.0;
+        if (region.count > 0) {
+            glm::dvec2 lo(1e300), hi(-1e300);
+            for (int j = 0; j < region.count; ++j) {
+                lo = glm::min(lo, glm::dvec2(region.pixels[size_t(j)]));
+                hi = glm::max(hi, glm::dvec2(region.pixels[size_t(j)]));
+            }
+            lo = glm::max(lo, glm::dvec2(0.0));
+            hi = glm::min(hi, glm::dvec2(s.width(), s.height()));
+            box_area = (hi.x - lo.x + 2.0) * (hi.y - lo.y + 2.0);
+        }
+        if (n % 4 == 0 && region.count > 0 && box_area <= 16384.0) {
+            // GL's texels, and the texels whose centre lies within 1/128 px of the polygon's
+            // float hull (its segments), where a snapping rasterizer may go either way.
+            penumbra::HullRaster gl = penumbra::influenceRegionTexels(region, s);
+            gl.uncertain.clear();
+            const std::vector<glm::dvec2> hull = penumbra::detail::convexPixelHull(region.pixels.data(), region.count);
+            glm::dvec2 blo(1e300), bhi(-1e300);
+            for (const glm::dvec2& v : hull) {
+                blo = glm::min(blo, v);
+                bhi = glm::max(bhi, v);
+            }
+            for (int y = std::max(0, int(std::floor(blo.y - 1.0))); y <= std::min(s.height() - 1, int(std::ceil(bhi.y + 1.0))); ++y)
+                for (int x = std::max(0, int(std::floor(blo.x - 1.0))); x <= std::min(s.width() - 1, int(std::ceil(bhi.x + 1.0))); ++x) {
+                    const glm::dvec2 c(x + 0.5, y + 0.5);
+                    double nearest = 1e300;
+                    for (size_t i = 0; i < hull.size(); ++i) {
+                        const glm::dvec2 a = hull[i], d = hull[(i + 1) % hull.size()] - a;
+                        const double dd = glm::dot(d, d);
+                        const double t = dd > 0.0 ? std::clamp(glm::dot(c - a, d) / dd, 0.0, 1.0) : 0.0;
+                        nearest = std::min(nearest, glm::length(c - (a + t * d)));
+                    }
+                    if (nearest <= 1.0 / 128.0) gl.uncertain.emplace_back(x, y);
+                }
+            const std::vector<glm::ivec2> visited = penumbra::influenceCoverageTexels(region, s);
+            std::set<std::pair<int, int>> set;
+            for (const glm::ivec2& t : visited) set.emplace(t.x, t.y);
+            ++st.coverage_checked;
+            st.coverage_texels += double(visited.size());
+            st.gl_texels += double(gl.fragments.size());
+            for (const auto* list : {&gl.fragments, &gl.uncertain})
+                for (const glm::ivec2& t : *list)
+                    if (!set.count({t.x, t.y}) && ++st.coverage_gl_misses <= 5)
+                        MESSAGE("coverage misses GL's texel (", t.x, ", ", t.y, "): case ", n, " family ", family);
+        }
         // Boundary-ish shadowed points: y on the light's bounding sphere, x on the triangle
         // (edge, vertex or interior), p = y + s (x - y) up to the far plane.
         for (int i = 0; i < 24; ++i) {
@@ -342,7 +403,9 @@ void report(const Stats& st, const char* what) {
             st.kinds[0], "/", st.kinds[1], "/", st.kinds[2], "/", st.kinds[3], "/", st.kinds[4],
             "; whole-grid reasons beyond-far/inside-light/vertex/ray: ", st.fallback_bits[0], "/", st.fallback_bits[1], "/",
             st.fallback_bits[2], "/", st.fallback_bits[3], "; max excursion of a shadowed receiver outside the float hull ",
-            st.max_excursion, " px; sampled-oracle checks ", st.sample_checks, ", inconsistent ", st.sample_inconsistent);
+            st.max_excursion, " px; sampled-oracle checks ", st.sample_checks, ", inconsistent ", st.sample_inconsistent,
+            "; coverage rule: misses ", st.coverage_misses, ", GL texels not visited ", st.coverage_gl_misses, " over ",
+            st.coverage_checked, " regions, visited / GL texels ", st.gl_texels > 0.0 ? st.coverage_texels / st.gl_texels : 0.0);
 }
 
 long envCount(long fallback) { return penumbra::test::envCount("PENUMBRA_INFLUENCE_CASES", fallback); }
@@ -357,6 +420,9 @@ TEST_CASE("cpu: influence regions never miss a shadowed texel (10^5 random + adv
     CHECK(st.misses == 0);
     CHECK(st.float_texel_misses == 0);
     CHECK(st.sample_inconsistent == 0);
+    CHECK(st.coverage_misses == 0);
+    CHECK(st.coverage_gl_misses == 0);
+    CHECK(st.coverage_checked >= st.cases / 16);
     CHECK(st.shadowed > st.cases);  // the boundary points really are shadowed
     CHECK(st.kinds[static_cast<int>(InfluenceRegionKind::Hull)] > st.cases / 3);
 }
@@ -369,6 +435,8 @@ TEST_SUITE("stress") {
         CHECK(st.misses == 0);
         CHECK(st.float_texel_misses == 0);
         CHECK(st.sample_inconsistent == 0);
+        CHECK(st.coverage_misses == 0);
+        CHECK(st.coverage_gl_misses == 0);
     }
 }
 

@@ -364,6 +364,17 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
         penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
         "deferred_fragments = 16776961"));
     options.deferred_fragments = 0;
+    // The coverage pass's box limit beyond 2^20 texels, its records beyond one dispatch's groups.
+    options.coverage_texels = (1u << 20) + 1u;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
+        "coverage_texels = 1048577"));
+    options.coverage_texels = 4096;
+    options.deferred_regions = 65535u * 64u + 1u;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
+        "deferred_regions = 4194241"));
+    options.deferred_regions = 0;
     // A binding past the driver's limit is named at construction (with deferral off, the deferred
     // passes' bindings are not used).
     penumbra::SbsBindings far_bindings;
@@ -592,6 +603,7 @@ TEST_CASE("SoftSkips::empty_blocks: the occupancy stencil changes no bit and no 
         options.list_block = 4;
         options.max_list_blocks = 4096;
         options.skips.empty_blocks = skip == 1;
+        options.coverage_texels = 0;  // every region drawn: the stencil's own culls (the coverage pass emulates them)
         penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
         pipeline.reserve(w.samples());
         pipeline.validate(input, lut_table);
@@ -881,6 +893,26 @@ TEST_CASE("SoftSkips::silhouettes: the GPU's texel marks == the CPU twin's (samp
     }
 }
 
+namespace {
+
+/// One frame of the pipeline on `w`'s depth input, every caster drawn by class and the adjacency
+/// draw given (skips.silhouettes): its masks, its counters in `frame`.
+std::vector<uint32_t> runFrame(const penumbra::SampleBasedSoftGpuOptions& options, const penumbra::test::GlWorld& w,
+                               const penumbra::test::GlSoftLight& soft, const penumbra::SampleDepthInput& input,
+                               const penumbra::BufferRange& table, const char* what, penumbra::SampleBasedSoftFrame* frame) {
+    const bool brute = options.mode == penumbra::SoftMode::Brute;
+    penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence, w.light.view_projection);
+    pipeline.reserve(w.samples());
+    pipeline.validate(input, table);
+    REQUIRE(pipeline.run(input, table, [&](penumbra::CasterClass c) { w.drawClass(c); }, {}, [&] { w.gpu.drawAdjacency(); }) ==
+            Status::Ok);
+    *frame = pipeline.readFrame();
+    penumbra::gl::checkErrors(what);
+    return pipeline.readMasks();
+}
+
+}  // namespace
+
 TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and counters, past its capacities too") {
     penumbra::test::context();
     // Every skip on (closed casters' second pass included: its pairs are worked after the first
@@ -910,15 +942,8 @@ TEST_CASE("Deferred pairs: the compute pass gives the fragment stage's bits and 
                 options.deferred_triangles = capacity.triangles;
                 options.deferred_tests = capacity.tests;
                 options.deferred_fragments = capacity.fragments;
-                penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
-                                                          w.light.view_projection);
-                pipeline.reserve(w.samples());
-                pipeline.validate(input, table);
-                REQUIRE(pipeline.run(input, table, [&](penumbra::CasterClass c) { w.drawClass(c); }, {},
-                                     [&] { w.gpu.drawAdjacency(); }) == Status::Ok);
-                *frame = pipeline.readFrame();
-                penumbra::gl::checkErrors("deferred pairs");
-                return pipeline.readMasks();
+                options.coverage_texels = 0;  // every region drawn, as the fragment-stage program draws them
+                return runFrame(options, w, soft, input, table, "deferred pairs", frame);
             };
             penumbra::SampleBasedSoftFrame off;
             const std::vector<uint32_t> off_masks = run({0, 0, 0, 0}, &off);
@@ -1009,6 +1034,7 @@ TEST_CASE("SoftSkips::wedges: no bit of exact or brute changes, in every tier of
                 options.skips.wedges = wedges;
                 options.deferred_pairs = pairs;
                 options.deferred_fragments = options.deferred_triangles = pairs > 0 ? 1u << 18 : 0u;
+                options.coverage_texels = 0;  // every region drawn in every tier (the coverage pass has its own test)
                 penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
                                                           w.light.view_projection);
                 pipeline.reserve(w.samples());
@@ -1046,6 +1072,76 @@ TEST_CASE("SoftSkips::wedges: no bit of exact or brute changes, in every tier of
                 CHECK(tiers[t].exact_tests == on.exact_tests);
                 CHECK(tiers[t].pairs_front == on.pairs_front);
                 if (t == 1) CHECK(tiers[t].pairs_deferred == on.pairs_deferred);
+            }
+        }
+    }
+}
+
+TEST_CASE("Coverage pass: the drawn regions' bits, a few more pairs, past its records and slots too") {
+    penumbra::test::context();
+    // SampleBasedSoftGpuOptions::coverage_texels: the regions the geometry stage hands to the
+    // coverage pass instead of drawing them (every skip on, closed casters' second pass included)
+    // against every region drawn (coverage_texels = 0). The pass visits every texel GL's rule covers
+    // and a few more on the boundary (tests/influence_region_test.cpp: the CPU twin against GL's
+    // rule), so Exact and Brute keep every bit while the work counters grow a little; Lut's extra
+    // pairs may add bits of its approximation (counted). Also: few records (the rest drawn), small
+    // boxes only, and too few triangle slots (the draws overflow and are drawn again).
+    struct Config {
+        uint32_t texels, regions, triangles;
+    };
+    for (const std::string name : {"columns", "torus_knot"}) {
+        const penumbra::test::GlWorld w(penumbra::scene::builtin(name));
+        const penumbra::test::GlSoftLight soft(w, 64, 128, 128);
+        const penumbra::SampleDepthInput input = w.depthInput();
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Lut, penumbra::SoftMode::Brute}) {
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            if (brute && name != "columns") continue;
+            const std::string mode_name = penumbra::softModeName(mode);
+            const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : soft.table();
+            const auto run = [&](Config config, penumbra::SampleBasedSoftFrame* frame) {
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 128;
+                options.list_block = 8;
+                options.skips.closed_casters = options.skips.silhouettes = true;
+                options.coverage_texels = config.texels;
+                options.deferred_regions = config.regions;
+                options.deferred_triangles = config.triangles;
+                return runFrame(options, w, soft, input, table, "coverage", frame);
+            };
+            penumbra::SampleBasedSoftFrame drawn;
+            const std::vector<uint32_t> drawn_masks = run({0, 0, 0}, &drawn);
+            CHECK(std::count_if(drawn_masks.begin(), drawn_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
+            for (const Config config : {Config{4096, 0, 0}, Config{1u << 20, 0, 0}, Config{4096, 16, 0}, Config{16, 0, 0},
+                                        Config{4096, 0, 16}}) {
+                CAPTURE(name);
+                CAPTURE(mode_name);
+                CAPTURE(config.texels);
+                CAPTURE(config.regions);
+                CAPTURE(config.triangles);
+                penumbra::SampleBasedSoftFrame covered;
+                const std::vector<uint32_t> masks = run(config, &covered);
+                uint64_t moved = 0;
+                for (size_t i = 0; i < drawn_masks.size(); ++i) moved += uint64_t(__builtin_popcount(drawn_masks[i] ^ masks[i]));
+                MESSAGE(name, " ", mode_name, ", coverage_texels ", config.texels, " / regions ", config.regions, " / triangles ",
+                        config.triangles, ": fragments ", covered.fragments, " (drawn ", drawn.fragments, "), pairs ", covered.pairs,
+                        " (", drawn.pairs, "), deferred ", covered.pairs_deferred, " (", drawn.pairs_deferred, "), fallbacks ",
+                        covered.deferral_fallbacks, ", bits moved ", moved);
+                if (mode != penumbra::SoftMode::Lut) CHECK(masks == drawn_masks);
+                // A few more texels and pairs, never fewer; none of the skips' work differs in kind.
+                CHECK(covered.fragments >= drawn.fragments);
+                CHECK(covered.fragments <= drawn.fragments + drawn.fragments / 20);
+                CHECK(covered.pairs + covered.pairs_cut + covered.pairs_wedged >= drawn.pairs + drawn.pairs_cut + drawn.pairs_wedged);
+                CHECK(covered.pairs <= drawn.pairs + drawn.pairs / 20 + 16);
+                CHECK(covered.triangles_culled == drawn.triangles_culled);
+                CHECK(covered.overflow == drawn.overflow);
+                if (config.triangles == 16) {
+                    CHECK(covered.deferral_fallbacks >= 1);  // the slots ran out: drawn again, as without the pass
+                    CHECK(masks == drawn_masks);
+                } else {
+                    CHECK(covered.deferral_fallbacks == 0);
+                }
+                if (mode == penumbra::SoftMode::Lut) CHECK(moved <= drawn_masks.size() * 32 / 1000);  // at most 0.1 % of the bits
             }
         }
     }

@@ -693,6 +693,63 @@ inline HullRaster influenceRegionTexels(const InfluenceRegion& region, const Inf
     return detail::pixelRule(region.pixels.data(), region.count, setup.width(), setup.height(), nullptr, tolerance);
 }
 
+/// The coverage rule of the soft pipeline's coverage pass (SampleBasedSoftGpuOptions::
+/// coverage_texels; its GLSL twin penumbraSbsCoverageSpan in
+/// shaders/penumbra/sample_based_soft/light_pass_coverage.comp.glsl, the same double operations):
+/// texel (x, y) is visited when its centre lies within kInfluenceCoverageSlack of the polygon in x
+/// and in y (the polygon grown by that square; on row y, the extent of the edges' points within the
+/// slack of y + 0.5, grown by the slack). So it holds every texel whose centre lies inside the
+/// polygon or within the slack of it: GL's rule, for any rasterizer that snaps vertices to 1/128
+/// pixel or finer (tests/influence_region_test.cpp).
+inline constexpr double kInfluenceCoverageSlack = 1.0 / 64.0;
+
+/// [first, last] of the texels whose centre lies within the slack of [lo, hi] on an axis of `size`
+/// texels (first > last: none).
+inline glm::ivec2 influenceCoverageRange(double lo, double hi, int size) {
+    const double first = std::ceil(std::clamp(lo - kInfluenceCoverageSlack - 0.5, -1.0, double(size)));
+    const double last = std::floor(std::clamp(hi + kInfluenceCoverageSlack - 0.5, -1.0, double(size)));
+    return {std::max(0, static_cast<int>(first)), std::min(size - 1, static_cast<int>(last))};
+}
+
+/// Row y's texels [x0, x1] of the polygon `pixels[0, count)` under the coverage rule.
+inline glm::ivec2 influenceCoverageSpan(const glm::vec2* pixels, int count, int y, int width) {
+    const double yc = double(y) + 0.5;
+    double left = 1e300, right = -1e300;
+    for (int j = 0; j < count; ++j) {
+        const glm::dvec2 a(pixels[j]), b(pixels[j + 1 < count ? j + 1 : 0]);
+        const double bottom = std::min(a.y, b.y), top = std::max(a.y, b.y);
+        if (yc < bottom - kInfluenceCoverageSlack || yc > top + kInfluenceCoverageSlack) continue;
+        if (top > bottom) {
+            const double t0 = std::clamp((yc - kInfluenceCoverageSlack - a.y) / (b.y - a.y), 0.0, 1.0);
+            const double t1 = std::clamp((yc + kInfluenceCoverageSlack - a.y) / (b.y - a.y), 0.0, 1.0);
+            const double x0 = a.x + t0 * (b.x - a.x), x1 = a.x + t1 * (b.x - a.x);
+            left = std::min(left, std::min(x0, x1));
+            right = std::max(right, std::max(x0, x1));
+        } else {
+            left = std::min(left, std::min(a.x, b.x));
+            right = std::max(right, std::max(a.x, b.x));
+        }
+    }
+    return influenceCoverageRange(left, right, width);
+}
+
+/// Every texel the coverage rule visits for the emitted polygon, row by row.
+inline std::vector<glm::ivec2> influenceCoverageTexels(const InfluenceRegion& region, const InfluenceRegionSetup& setup) {
+    std::vector<glm::ivec2> out;
+    if (region.count <= 0) return out;
+    double lo = 1e300, hi = -1e300;
+    for (int j = 0; j < region.count; ++j) {
+        lo = std::min(lo, double(region.pixels[size_t(j)].y));
+        hi = std::max(hi, double(region.pixels[size_t(j)].y));
+    }
+    const glm::ivec2 rows = influenceCoverageRange(lo, hi, setup.height());
+    for (int y = rows.x; y <= rows.y; ++y) {
+        const glm::ivec2 span = influenceCoverageSpan(region.pixels.data(), region.count, y, setup.width());
+        for (int x = span.x; x <= span.y; ++x) out.emplace_back(x, y);
+    }
+    return out;
+}
+
 /// GL's rule for one texel of the emitted polygon (double, on the float vertices' convex hull:
 /// detail::convexPixelHull says why).
 inline bool influenceRegionCoversTexel(const InfluenceRegion& region, int x, int y) {

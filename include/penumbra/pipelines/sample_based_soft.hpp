@@ -875,6 +875,19 @@ struct SampleBasedSoftGpuOptions {
     /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
     /// deferred_pairs / 4 (4 MiB by default).
     uint32_t deferred_tests = 0;
+    /// Deferred pairs: influence regions whose bounding box spans at most this many texels are
+    /// not drawn; the geometry stage hands them, as records (the triangle's slot and its polygon),
+    /// to a coverage pass (light_pass_coverage.comp.glsl) that visits their texels in a loop and
+    /// appends the same pairs the fragment stage would. The texels it visits are every texel GL's
+    /// rule rasterizes and a few more on the boundary (within 1/64 pixel): Exact and Brute keep
+    /// every bit; a visited texel's pairs are worked, so `fragments` and the pair counters may
+    /// grow slightly, and Lut's pairs there may add bits of its approximation. Larger regions, and
+    /// those past deferred_regions, are drawn. Why: llvmpipe's setup and rasterisation of the
+    /// strips took ~18 of a frame's ~45 ms. 0 = off (every region drawn); at most 2^20.
+    uint32_t coverage_texels = 4096;
+    /// Records for coverage_texels (4 (2 + 2 (3k + 5)) bytes each: 192 for k = 6). 0: the smaller
+    /// of the triangle slots and 2^16 (12 MiB at k = 6).
+    uint32_t deferred_regions = 0;
     /// Per-stage GPU times (GL_TIME_ELAPSED around the list build, the predicate + light pass and
     /// the resolve), read by readFrame(). Off: no query calls per frame.
     bool timings = false;
@@ -905,6 +918,10 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    o.deferred_fragments, " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
+    PENUMBRA_CHECK(o.coverage_texels <= (1u << 20), "penumbra::SampleBasedSoftShadows: coverage_texels = ", o.coverage_texels,
+                   " must be at most 1048576");
+    PENUMBRA_CHECK(o.deferred_regions <= 65535u * 64u, "penumbra::SampleBasedSoftShadows: deferred_regions = ", o.deferred_regions,
+                   " must be at most 4194240 (one dispatch of 65 535 groups of 64)");
 }
 
 /// The light-pass parameter block for list block `block` and one caster class (the host fills one

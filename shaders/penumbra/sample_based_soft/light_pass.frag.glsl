@@ -36,6 +36,7 @@ layout(std430, binding = PENUMBRA_SBS_PAIRS_BINDING) writeonly buffer PenumbraSb
 layout(std430, binding = PENUMBRA_SBS_FRAGMENTS_BINDING) writeonly buffer PenumbraSbsFragments { uvec2 penumbraSbsFragments[]; };
 // Counters wait in the deferral buffer (kept only when the draws did not overflow).
 #define PENUMBRA_SBS_COUNT(index) atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + (index)], 1u)
+#include "penumbra/sample_based_soft/deferral_append.glsl"
 #else
 #define PENUMBRA_SBS_COUNT(index) atomicAdd(penumbraSbsWork[index], 1u)
 #endif
@@ -95,49 +96,14 @@ void main() {
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 1u;  // the triangle found no slot
         return;
     }
-    // One pair per view sample of the block: the compute pass's lanes each walk one sample (a
-    // group of lanes walking whole blocks would take as long as its longest block). A block that
-    // does not fit the pairs buffer goes whole to the fragments buffer (the compute pass walks it
-    // in one invocation); the one that straddles the capacity leaves its share below it empty.
-    // Once the buffer is full no fragment adds to its counter, which cannot wrap around then (at
-    // most the fragments in flight add past the capacity, each at most a list block).
-    // SoftSkips::wedges: only the samples no wedge plane of T rejects get a pair (the rest are
-    // counted here, as is the fragment, when its pairs fit; the per-fragment pass counts both
-    // otherwise).
+    // One pair per view sample of the block (deferral_append.glsl): the compute pass's lanes each
+    // walk one sample (a group of lanes walking whole blocks would take as long as its longest
+    // block).
 #if PENUMBRA_SBS_WEDGES
-    const PenumbraSbsWedges wedges = PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin);
-    const float wedge_mu2 = uintBitsToFloat(P.reserved.z);  // detail::soft::wedgeMu2
-    uint kept = 0u;
-    for (uint i = 0u; i < range.y; ++i)
-        if (!penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(range.x + i), wedge_mu2)) ++kept;
+    penumbraSbsAppendBlock(texel, range, penumbraSbsTriangle, PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin));
 #else
-    const uint kept = range.y;
+    penumbraSbsAppendBlock(texel, range, penumbraSbsTriangle, penumbraSbsNoWedges());
 #endif
-    const uint capacity = uint(penumbraSbsPairs.length());
-    const uint first = kept == 0u ? 0u
-                       : penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] >= capacity
-                           ? capacity
-                           : atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS], kept);
-    const bool fits = kept == 0u || (first < capacity && kept <= capacity - first);
-    if (fits) {
-        uint k = first;
-        for (uint i = 0u; i < range.y && k < first + kept; ++i) {
-#if PENUMBRA_SBS_WEDGES
-            if (penumbraSbsWedgeRejects(wedges, penumbraSampleListsPosition(range.x + i), wedge_mu2)) continue;
-#endif
-            penumbraSbsPairs[k++] = uvec2(PENUMBRA_SBS_PAIR_X(penumbraSbsTriangle, i), PENUMBRA_SBS_PAIR_Y(texel.x, texel.y, i));
-        }
-#if PENUMBRA_SBS_COUNT_WORK
-        PENUMBRA_SBS_COUNT(PENUMBRA_SBS_WORK_FRAGMENTS);
-        if (kept < range.y)
-            atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + PENUMBRA_SBS_WORK_PAIRS_WEDGED], range.y - kept);
-#endif
-    } else {
-        for (uint k = first; k < capacity; ++k) penumbraSbsPairs[k] = uvec2(0u, PENUMBRA_SBS_PAIR_EMPTY);
-        if (first < capacity) penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY] = capacity - first;
-        const uint f = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS], 1u);
-        if (f < uint(penumbraSbsFragments.length())) penumbraSbsFragments[f] = uvec2(penumbraSbsTriangle, texel.x | texel.y << 16u);
-    }
 #else
 #if PENUMBRA_SBS_WEDGES
     const PenumbraSbsWedges wedges = PenumbraSbsWedges(penumbraSbsWedge, penumbraSbsWedgeMargin);

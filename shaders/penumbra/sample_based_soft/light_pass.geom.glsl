@@ -13,7 +13,14 @@
 // culled-triangle count waits in the deferral buffer as the fragment stage's counters do.
 // PENUMBRA_SBS_WEDGES (SoftSkips::wedges): the triangle's wedge planes (wedges.glsl) travel flat to
 // the fragment stage, and into its slot.
+// PENUMBRA_SBS_COVERAGE (SampleBasedSoftGpuOptions::coverage_texels, with PENUMBRA_SBS_DEFERRED):
+// a region with a slot whose bounding box spans at most PENUMBRA_SBS_REGION_MAX_TEXELS texels is
+// stored as a record (slot, polygon) after the PENUMBRA_SBS_REGION_BASE / PENUMBRA_SBS_TRIANGLE_WORDS
+// slots, while the PENUMBRA_SBS_REGION_CAPACITY records last, and not emitted: the coverage pass
+// (light_pass_coverage.comp.glsl) visits its texels.
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_WEDGES=1
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_WEDGES=1 PENUMBRA_SBS_COVERAGE=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=16u PENUMBRA_SBS_REGION_MAX_TEXELS=4096u
+// penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1 PENUMBRA_SBS_DEFERRED=1 PENUMBRA_SBS_COVERAGE=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=16u PENUMBRA_SBS_REGION_MAX_TEXELS=64u
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6 PENUMBRA_SBS_WEDGES=1
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_INFLUENCE_CUT=1
@@ -36,6 +43,17 @@
 #endif
 #ifndef PENUMBRA_SBS_WEDGES
 #define PENUMBRA_SBS_WEDGES 0
+#endif
+#ifndef PENUMBRA_SBS_COVERAGE
+#define PENUMBRA_SBS_COVERAGE 0  // 1 (with PENUMBRA_SBS_DEFERRED): small regions to the coverage pass
+#endif
+#if PENUMBRA_SBS_COVERAGE
+#if !PENUMBRA_SBS_DEFERRED
+#error PENUMBRA_SBS_COVERAGE needs PENUMBRA_SBS_DEFERRED
+#endif
+#ifndef PENUMBRA_SBS_REGION_BASE
+#error PENUMBRA_SBS_COVERAGE needs PENUMBRA_SBS_REGION_BASE, PENUMBRA_SBS_REGION_CAPACITY and PENUMBRA_SBS_REGION_MAX_TEXELS
+#endif
 #endif
 
 layout(triangles) in;
@@ -106,7 +124,12 @@ void main() {
 #if PENUMBRA_SBS_DEFERRED
     if (count > 0 && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
         const uint k = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES], 1u);
-        if (k < uint(penumbraSbsTriangles.length()) / PENUMBRA_SBS_TRIANGLE_WORDS) {
+#if PENUMBRA_SBS_COVERAGE
+        const uint slots = uint(PENUMBRA_SBS_REGION_BASE) / PENUMBRA_SBS_TRIANGLE_WORDS;  // the records follow the slots
+#else
+        const uint slots = uint(penumbraSbsTriangles.length()) / PENUMBRA_SBS_TRIANGLE_WORDS;
+#endif
+        if (k < slots) {
             // The vertices' bits, then the draw's list block and flags (what the compute pass needs
             // of this draw's parameter block).
             slot = k;
@@ -119,6 +142,33 @@ void main() {
             penumbraSbsTriangles[base + 26u] = floatBitsToUint(wedges.margin.x);
             penumbraSbsTriangles[base + 27u] = floatBitsToUint(wedges.margin.y);
 #endif
+        }
+    }
+#endif
+#if PENUMBRA_SBS_COVERAGE
+    // A region of at most PENUMBRA_SBS_REGION_MAX_TEXELS texels in its bounding box, with a slot,
+    // goes to the coverage pass (light_pass_coverage.comp.glsl) as a record, while records last:
+    // nothing is emitted (llvmpipe's setup and rasterisation of the strip cost more than the
+    // pass's loop over the box). The rest are drawn.
+    if (slot != PENUMBRA_SBS_NO_TRIANGLE) {
+        vec2 lo = penumbraInfluenceOut[0], hi = lo;
+        for (int j = 1; j < count; ++j) {
+            lo = min(lo, penumbraInfluenceOut[j]);
+            hi = max(hi, penumbraInfluenceOut[j]);
+        }
+        const vec2 extent = min(hi, penumbraSbsInfluence.grid.xy) - max(lo, vec2(0.0)) + 2.0;
+        if (extent.x * extent.y <= float(PENUMBRA_SBS_REGION_MAX_TEXELS)) {
+            const uint r = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS], 1u);
+            if (r < uint(PENUMBRA_SBS_REGION_CAPACITY)) {
+                const uint base = uint(PENUMBRA_SBS_REGION_BASE) + PENUMBRA_SBS_REGION_WORDS(PENUMBRA_INFLUENCE_SIDES) * r;
+                penumbraSbsTriangles[base] = slot;
+                penumbraSbsTriangles[base + 1u] = uint(count);
+                for (int j = 0; j < count; ++j) {
+                    penumbraSbsTriangles[base + 2u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].x);
+                    penumbraSbsTriangles[base + 3u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].y);
+                }
+                return;
+            }
         }
     }
 #endif

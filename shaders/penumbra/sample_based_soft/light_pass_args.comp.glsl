@@ -9,11 +9,14 @@
 // resets the append counters for the next draws. One invocation. PENUMBRA_SBS_ARGS_KIND=1 and 2:
 // the same for the exact-test pass (light_pass_tests.comp.glsl) and the tables pass
 // (light_pass_tables.comp.glsl), after the passes that fill their buffers: the entries appended, up
-// to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work).
+// to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work); kind 3 the same for
+// the coverage pass (light_pass_coverage.comp.glsl) after the draws, before kind 0 (the records
+// past its capacity were drawn).
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY=256u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
@@ -44,13 +47,21 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_SAMPLES
 #define PENUMBRA_SBS_ARGS_DISPATCHED PENUMBRA_SBS_DEFERRAL_SAMPLES_DISPATCHED
 #define PENUMBRA_SBS_ARGS_WORDS PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS
+#elif PENUMBRA_SBS_ARGS_KIND == 3
+#define PENUMBRA_SBS_ARGS_COUNTER PENUMBRA_SBS_DEFERRAL_REGIONS
+#define PENUMBRA_SBS_ARGS_DISPATCHED PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED
+#define PENUMBRA_SBS_ARGS_WORDS PENUMBRA_SBS_DEFERRAL_REGION_ARGS
+#define PENUMBRA_SBS_ARGS_GROUP PENUMBRA_SBS_COVERAGE_GROUP
+#endif
+#ifndef PENUMBRA_SBS_ARGS_GROUP
+#define PENUMBRA_SBS_ARGS_GROUP PENUMBRA_SBS_DEFERRAL_GROUP
 #endif
 
 void main() {
 #if PENUMBRA_SBS_ARGS_KIND != 0
     const uint entries = min(penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER], uint(PENUMBRA_SBS_ARGS_CAPACITY));
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_DISPATCHED] = entries;
-    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS] = (entries + uint(PENUMBRA_SBS_DEFERRAL_GROUP) - 1u) / uint(PENUMBRA_SBS_DEFERRAL_GROUP);
+    penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS] = (entries + uint(PENUMBRA_SBS_ARGS_GROUP) - 1u) / uint(PENUMBRA_SBS_ARGS_GROUP);
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS + 1] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS + 2] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER] = 0u;

@@ -145,9 +145,16 @@
 #define PENUMBRA_SBS_DEFERRAL_FRAGMENTS 39   // fragments appended to the fragments buffer (may exceed the capacity)
 #define PENUMBRA_SBS_DEFERRAL_FRAGMENTS_DISPATCHED 40  // fragments the per-fragment pass reads
 #define PENUMBRA_SBS_DEFERRAL_EMPTY 41       // empty pairs below the capacity (the one fragment that straddled it)
+#define PENUMBRA_SBS_DEFERRAL_REGIONS 42   // coverage: region records appended (may exceed the capacity)
+#define PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED 43  // coverage: region records the coverage pass reads
 #define PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS 44  // 3 words: the per-fragment pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 48
+#define PENUMBRA_SBS_DEFERRAL_REGION_ARGS 48  // 3 words: the coverage pass's group counts
+#define PENUMBRA_SBS_DEFERRAL_WORDS 52
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
+#define PENUMBRA_SBS_COVERAGE_GROUP 64      // light_pass_coverage.comp.glsl's workgroup size
+// A region record (coverage, after the triangle slots in the triangles buffer): the triangle's
+// slot, the polygon's vertex count n, then n vec2 (grid pixels) as float bits.
+#define PENUMBRA_SBS_REGION_WORDS(k) (2u + 2u * uint(PENUMBRA_INFLUENCE_MAX_VERTICES(k)))
 #define PENUMBRA_SBS_NO_TRIANGLE 0xFFFFFFFFu // no slot: the draws overflowed
 #define PENUMBRA_SBS_TRIANGLE_WORDS 28u      // a slot: 9 float bits (world vertices), list block | flags << 16,
                                              // with SoftSkips::wedges its 4 planes and 2 margins (wedges.glsl)

@@ -34,7 +34,7 @@ PenumbraSbsParams penumbraSbsSlotParams(uint slot) {
     return P;
 }
 
-#if defined(PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL) && PENUMBRA_SBS_STAGE != 0  // the pairs and tables passes
+#if defined(PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL)  // the pairs, tables and coverage passes
 /// The wedge planes the geometry stage stored in slot `slot` (SoftSkips::wedges).
 PenumbraSbsWedges penumbraSbsSlotWedges(uint slot) {
     const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * slot + 10u;
@@ -45,6 +45,9 @@ PenumbraSbsWedges penumbraSbsSlotWedges(uint slot) {
     w.margin = uintBitsToFloat(uvec2(penumbraSbsTriangles[base + 16u], penumbraSbsTriangles[base + 17u]));
     return w;
 }
+#endif
+
+#if defined(PENUMBRA_SBS_LIGHT_PASS_WORK_GLSL) && PENUMBRA_SBS_STAGE != 0  // the pairs and tables passes
 
 /// The compute passes' work (light_pass_work.glsl's penumbraSbsTexelWork) of slot `slot`'s triangle
 /// on `texel`'s list block of the slot's draw: the whole block, or only its sample `index`

@@ -39,7 +39,10 @@
 //             closed_casters culls their triangles that face away from the whole light), Open =
 //             the rest. options.skips: the work skips (SoftSkips), none of which changes a bit of
 //             Exact or Brute. options.deferred_pairs: the light pass's pair work in a compute pass
-//             instead of its fragment stage (same bits and counters).
+//             instead of its fragment stage (same bits and counters). options.coverage_texels
+//             (with deferred_pairs): small influence regions visited by a compute pass instead of
+//             drawn (Exact and Brute: the same bits; the counters grow by the boundary texels it
+//             adds, ~0.3 % of the fragments).
 //   produces: per view-sample id `words = ceil(N / 32)` mask words (bit s of word id * words +
 //             s / 32: light sample s of its set blocked) in masks() or your range, and the visible
 //             fraction 1 - popcount / N as a float per id (PENUMBRA_SBS_VISIBILITY_NO_SAMPLE /
@@ -60,7 +63,12 @@
 //             shaded, blocks 0..254; count_work draws the culled ones once more, GL_GEQUAL b, to
 //             count them); the geometry stage culls (skips) and emits the influence region, each
 //             fragment walks its texel's list block (light_pass_work.glsl) or, with deferred_pairs,
-//             appends (triangle slot, texel) for (3b) the compute pass: a one-invocation dispatch
+//             appends (triangle slot, texel) for (3b) the compute pass (with coverage_texels, first
+//             a compute pass sets one occupancy bit per non-empty texel, the geometry stage hands
+//             regions whose box spans at most coverage_texels texels to the coverage pass as
+//             records instead of emitting them, and after the draws the coverage pass
+//             (light_pass_coverage.comp.glsl) visits their rows' non-empty texels and appends
+//             their pairs as the fragments would): a one-invocation dispatch
 //             turns the count into group counts, glDispatchComputeIndirect works every appended pair
 //             (light_pass.comp.glsl), the same way the tables pass its samples that need the LUT's
 //             tables (light_pass_tables.comp.glsl) and the exact-test pass the pending words of
@@ -250,9 +258,32 @@ public:
                            " is not below ", uniform ? "GL_MAX_UNIFORM_BUFFER_BINDINGS = " : "GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS = ",
                            limit, " (choose lower SbsBindings", deferred ? ", or set deferred_pairs = 0)" : ")");
         }
+        // Coverage (options.coverage_texels): records after the triangle slots.
+        const uint32_t slots = options_.deferred_triangles ? options_.deferred_triangles
+                                                           : std::max<uint32_t>(1, options_.deferred_pairs / 4);
+        const bool coverage = deferred && options_.coverage_texels > 0;
+        const uint32_t regions = !coverage ? 0u
+                                 : options_.deferred_regions ? options_.deferred_regions
+                                                             : std::min<uint32_t>(slots, 1u << 16);
+        const uint32_t region_words = 2u + 2u * uint32_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence.sides()));
+        const uint32_t occupancy_row = (options_.grid_width + 31) / 32;
+        const uint64_t occupancy_words = coverage ? uint64_t(occupancy_row) * options_.grid_height : 0u;
+        ShaderDefines region_defines;
+        if (coverage) {
+            region_defines.push_back({"PENUMBRA_SBS_REGION_BASE", std::to_string(uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_REGION_CAPACITY", std::to_string(regions) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_REGION_MAX_TEXELS", std::to_string(options_.coverage_texels) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_OCCUPANCY_BASE",
+                                      std::to_string(uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * region_words) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_OCCUPANCY_ROW", std::to_string(occupancy_row) + "u"});
+            region_defines.push_back(
+                {"PENUMBRA_SBS_STENCIL_BLOCKS", std::to_string(options_.skips.empty_blocks ? gl::kOccupancyStencilBlocks : 0u) + "u"});
+        }
         const auto light_pass_program = [&](bool deferring) {
             ShaderDefines d = defines;
             d.push_back({"PENUMBRA_SBS_DEFERRED", deferring ? "1" : "0"});
+            d.push_back({"PENUMBRA_SBS_COVERAGE", deferring && coverage ? "1" : "0"});
+            if (deferring) d.insert(d.end(), region_defines.begin(), region_defines.end());
             return gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl", "penumbra/sample_based_soft/light_pass.geom.glsl",
                                      "penumbra/sample_based_soft/light_pass.frag.glsl"},
                                     d, library);
@@ -268,8 +299,7 @@ public:
                            "penumbra::SampleBasedSoftShadows: deferred_pairs needs ", options_.count_work ? 3 : 2,
                            " geometry and ", needed + 5, " compute storage blocks; the driver has ", geometry_blocks, " and ",
                            compute_blocks, "; set deferred_pairs = 0");
-            const uint32_t triangles = options_.deferred_triangles ? options_.deferred_triangles
-                                                                   : std::max<uint32_t>(1, options_.deferred_pairs / 4);
+            const uint32_t triangles = slots;
             const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
             const uint32_t test_words = options_.deferred_tests ? options_.deferred_tests
                                                                 : std::max<uint32_t>(1, options_.deferred_pairs / 4);
@@ -278,7 +308,7 @@ public:
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
             const uint64_t fragment_bytes = uint64_t(fragments) * 8;
             const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
-            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS;
+            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * 4 * region_words + 4 * occupancy_words;
             PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
                                fragment_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
@@ -297,6 +327,15 @@ public:
             test_args_ = args_program(1, test_words);
             table_args_ = args_program(2, options_.deferred_pairs);
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
+            if (coverage) {
+                region_args_ = args_program(3, regions);
+                ShaderDefines d = defines;
+                d.insert(d.end(), region_defines.begin(), region_defines.end());
+                light_coverage_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                d.push_back({"PENUMBRA_SBS_COVERAGE_BITS", "1"});
+                coverage_bits_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                coverage_bit_groups_ = uint32_t(detail::divUp(occupancy_words, PENUMBRA_SBS_COVERAGE_GROUP));
+            }
             ShaderDefines per_fragment = defines;
             per_fragment.push_back({"PENUMBRA_SBS_PER_FRAGMENT", "1"});
             light_fragments_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", per_fragment, library);
@@ -515,14 +554,15 @@ private:
     gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_, near_blocks_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
-    gl::Program light_compute_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
+    gl::Program light_compute_, light_coverage_, coverage_bits_, region_args_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
         table_args_, light_tables_;
     gl::Buffer deferral_, pairs_, triangles_, tests_, table_pairs_, fragments_;
+    uint32_t coverage_bit_groups_ = 0;  // the occupancy bits' groups (coverage_texels)
     std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
-    /// pass), closed for count_work's complement draw.
-    static constexpr uint32_t kSlotsPerBlock = 4;
+    /// pass), and the same three for count_work's complement draws.
+    static constexpr uint32_t kSlotsPerBlock = 6;
     gl::Buffer marks_;                                // SoftSkips::silhouettes: W x H texel marks
     gl::Buffer near_;                                 // SoftSkips::closed_casters: per sample
     const DrawAdjacency* draw_adjacency_ = nullptr;   // this run's (begin() .. the light pass)
@@ -599,6 +639,18 @@ private:
     void workDeferredPairs(const Pass& pass, const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) {
         if (options_.deferred_pairs == 0) return;
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        if (light_coverage_.id() != 0) {
+            // The regions the geometry stage handed over instead of drawing them: their pairs
+            // appended as the fragment stage's were, before the pairs' group counts are taken.
+            region_args_.use();
+            glDispatchCompute(1, 1, 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+            light_coverage_.use();
+            bindParams(0);  // each record's list block and flags come from its triangle slot
+            glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
+            glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_REGION_ARGS * 4));
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
         deferral_args_.use();
         glDispatchCompute(1, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
@@ -668,16 +720,18 @@ private:
     void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
-        // Slot 0: the predicate pass and the resolve; 1 + 4 b + c: list block b, c = 0 closed, 1 open,
-        // 2 closed again (SoftSkips::closed_casters' second pass), 3 closed for count_work's
-        // complement draw (no culled triangle counted twice).
+        // Slot 0: the predicate pass and the resolve; 1 + 6 b + c: list block b, c = 0 closed, 1 open,
+        // 2 closed again (SoftSkips::closed_casters' second pass), and for count_work's complement
+        // draws (no triangle slot taken, no region handed to the coverage pass, no culled triangle
+        // counted twice) 3 closed, 4 open, 5 the second pass.
         for (uint32_t slot = 0; slot <= kSlotsPerBlock * options_.max_list_blocks; ++slot) {
             const uint32_t block = slot == 0 ? 0u : (slot - 1) / kSlotsPerBlock;
             const uint32_t c = slot == 0 ? 1u : (slot - 1) % kSlotsPerBlock;
             // Validated at construction: cannot throw.
-            SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1, c == 2);
+            SbsParams p = sampleBasedSoftParams(options_, sets_, lut, setup_.sample_count, block, has_sets, c != 1 && c != 4,
+                                                c == 2 || c == 5);
             p.epsilon.w = sample_reach_;  // SoftSkips::wedges: the sample table's own sphere (tighter)
-            if (c == 3) p.reserved.y |= PENUMBRA_SBS_FLAG_COMPLEMENT;
+            if (c >= 3) p.reserved.y |= PENUMBRA_SBS_FLAG_COMPLEMENT;
             std::memcpy(params_staging_.data() + size_t(slot) * param_stride_, &p, sizeof p);
         }
         glNamedBufferSubData(params_.id(), 0, static_cast<GLsizeiptr>(params_staging_.size()), params_staging_.data());
@@ -736,9 +790,16 @@ private:
         // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
         // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
         const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
-        light_pass_.use();
         glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
         bindLightPass(masks, lut_table, frame);
+        if (coverage_bits_.id() != 0) {
+            // coverage_texels: the occupancy bits the coverage pass reads (the lists are done).
+            coverage_bits_.use();
+            bindParams(0);
+            glDispatchCompute(coverage_bit_groups_, 1, 1);  // <= 8192 * 256 / 64 groups
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        light_pass_.use();
         const bool complement = stencil && options_.count_work;
         // The first pass: every list block, closed then open casters (and count_work's complement).
         const auto first_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
@@ -753,7 +814,7 @@ private:
                 if (complement && b < stencil_blocks) {
                     stencilTest(b, GL_GEQUAL);
                     for (uint32_t c = 0; c < 2; ++c) {
-                        bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 1));
+                        bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 4));
                         program.use();
                         draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
                     }
@@ -769,7 +830,7 @@ private:
                 for (GLenum func : {GLenum(GL_LESS), GLenum(GL_GEQUAL)}) {
                     if (func == GL_GEQUAL && !(complement && b < stencil_blocks)) continue;
                     stencilTest(b, func);
-                    bindParams(1 + kSlotsPerBlock * b + 2);
+                    bindParams(1 + kSlotsPerBlock * b + (func == GL_GEQUAL ? 5 : 2));
                     program.use();
                     draw_casters(CasterClass::Closed);
                 }
