@@ -1147,6 +1147,47 @@ TEST_CASE("Coverage pass: the drawn regions' bits, a few more pairs, past its re
     }
 }
 
+TEST_CASE("Coverage pass: the texels it visits are the CPU twin's (influenceCoverageTexels), region by region") {
+    penumbra::test::context();
+    // Every region to the coverage pass (coverage_texels 2^20 > the 64^2 grid), no skip (no
+    // stencil, no culled triangle), one list block: with count_work every texel the pass visits
+    // counts as one fragment, so the frame's fragments are the sum over the drawn triangles of the
+    // twin's visited texels. Holds where the GPU's influence regions are the CPU's bit for bit
+    // (correctly rounded float, llvmpipe: the influence-region block's own test checks that); on
+    // other drivers the sum may differ by boundary texels.
+    const penumbra::test::GlWorld w(penumbra::scene::builtin("columns"));
+    const penumbra::test::GlSoftLight soft(w, 32, 64, 128);
+    const penumbra::SampleDepthInput input = w.depthInput();
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.mode = penumbra::SoftMode::Lut;
+    options.grid_width = options.grid_height = 64;
+    options.list_block = 4096;
+    options.skips.empty_blocks = options.skips.closed_casters = options.skips.plane_cut = false;
+    options.skips.silhouettes = options.skips.wedges = false;
+    options.coverage_texels = 1u << 20;
+    options.deferred_pairs = options.deferred_fragments = 1u << 22;  // no redraw
+    options.deferred_triangles = 1u << 16;
+    penumbra::SampleBasedSoftFrame frame;
+    (void)runFrame(options, w, soft, input, soft.table(), "coverage twin", &frame);
+    uint64_t expected = 0, regions = 0;
+    const std::vector<glm::vec3>& positions = w.gpu.positions();
+    const std::vector<uint32_t>& indices = w.gpu.indices();
+    for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+        const glm::vec3 a = positions[indices[t]], b = positions[indices[t + 1]], c = positions[indices[t + 2]];
+        if (penumbra::detail::degenerateTriangle(glm::dvec3(a), glm::dvec3(b), glm::dvec3(c))) continue;
+        const penumbra::InfluenceRegion region = penumbra::influenceRegion(a, b, c, soft.influence);
+        if (region.count <= 0) continue;
+        ++regions;
+        expected += penumbra::influenceCoverageTexels(region, soft.influence).size();
+    }
+    MESSAGE("columns, 64^2 grid: ", indices.size() / 3, " triangles, ", regions, " regions, ", expected,
+            " texels visited by the twin, ", frame.fragments, " fragments counted by the GPU pass; passes ", frame.passes);
+    CHECK(frame.passes == 1);
+    CHECK(frame.deferral_fallbacks == 0);
+    CHECK(regions > 100);
+    CHECK(frame.fragments == expected);
+}
+
 TEST_CASE("Deferred pairs: a pair's entry unpacks to its triangle slot, list-block index and texel at the options' limits") {
     penumbra::test::context();
     penumbra::ShaderLibrary lib = penumbra::ShaderLibrary::embedded();
