@@ -12,7 +12,11 @@
 // influence region needs (SoftMode::Exact and Brute: the same bits; an extra texel's pairs find
 // nothing to block).
 // Dispatched indirectly with the group counts light_pass_args.comp.glsl (kind 3) wrote.
-// Defines: light_pass_work.glsl's, PENUMBRA_SBS_REGION_BASE, PENUMBRA_INFLUENCE_SIDES.
+// Defines: light_pass_work.glsl's, PENUMBRA_INFLUENCE_SIDES, PENUMBRA_SBS_REGION_BASE (the records'
+// first word in the triangles buffer), PENUMBRA_SBS_OCCUPANCY_BASE / _ROW (the occupancy bits' first
+// word and words per grid row), PENUMBRA_SBS_STENCIL_BLOCKS (the list blocks the occupancy stencil
+// would cover: 255 with SoftSkips::empty_blocks, else 0), PENUMBRA_SBS_COVERAGE_BITS=1: the program
+// that sets the occupancy bits instead (one invocation per word, after the lists).
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0 PENUMBRA_SBS_WEDGES=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_SBS_CLOSED_CASTERS=1 PENUMBRA_SBS_WEDGES=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_INFLUENCE_SIDES=12
@@ -66,8 +70,8 @@ layout(std430, binding = PENUMBRA_SBS_FRAGMENTS_BINDING) writeonly buffer Penumb
 
 vec2 penumbraSbsRegion[PENUMBRA_INFLUENCE_MAX_VERTICES(PENUMBRA_INFLUENCE_SIDES)];
 
-// The texels [x, y] whose centre + 0.5 lies within the slack of [lo, hi], clipped to [0, size).
-// (Empty: x > y.)
+// The texel indices [first, last] on an axis of `size` texels whose centres (index + 0.5) lie
+// within the slack of [lo, hi] (none: first > last).
 ivec2 penumbraSbsCoverageRange(double lo, double hi, int size) {
     const double first = ceil(clamp(lo - PENUMBRA_SBS_COVERAGE_SLACK - 0.5LF, -1.0LF, double(size)));
     const double last = floor(clamp(hi + PENUMBRA_SBS_COVERAGE_SLACK - 0.5LF, -1.0LF, double(size)));
