@@ -779,6 +779,181 @@ TEST_CASE("obj: the validating pass names the line and the value") {
                    objectOf(loadObj(dir.write("quad_cube.obj", kQuadCubeObj)))));
 }
 
+/// UV sphere of radius `radius` around `centre` (slices x stacks, single-vertex poles, quads in
+/// between, outward winding), printed with 17 digits so the file holds the doubles exactly.
+/// `offsets` receives each vertex's position relative to the centre, in file order.
+std::string uvSphereObj(const glm::dvec3& centre, double radius, std::vector<glm::dvec3>& offsets) {
+    const int slices = 8, stacks = 6;
+    const double pi = 3.14159265358979323846;
+    offsets.clear();
+    offsets.emplace_back(0.0, radius, 0.0);
+    for (int i = 1; i < stacks; ++i) {
+        const double theta = pi * i / stacks;
+        for (int j = 0; j < slices; ++j) {
+            const double phi = 2.0 * pi * j / slices;
+            offsets.emplace_back(radius * std::sin(theta) * std::cos(phi), radius * std::cos(theta),
+                                 radius * std::sin(theta) * std::sin(phi));
+        }
+    }
+    offsets.emplace_back(0.0, -radius, 0.0);
+    std::ostringstream obj;
+    obj.precision(17);
+    for (const glm::dvec3& q : offsets) obj << "v " << centre.x + q.x << ' ' << centre.y + q.y << ' ' << centre.z + q.z << '\n';
+    const int bottom = 1 + slices * (stacks - 1) + 1;
+    auto ring = [&](int i, int j) { return 2 + (i - 1) * slices + (j % slices); };  // 1-based
+    for (int j = 0; j < slices; ++j) {
+        obj << "f 1 " << ring(1, j + 1) << ' ' << ring(1, j) << '\n';
+        for (int i = 1; i + 1 < stacks; ++i)
+            obj << "f " << ring(i, j) << ' ' << ring(i, j + 1) << ' ' << ring(i + 1, j + 1) << ' ' << ring(i + 1, j) << '\n';
+        obj << "f " << bottom << ' ' << ring(stacks - 1, j) << ' ' << ring(stacks - 1, j + 1) << '\n';
+    }
+    return obj.str();
+}
+
+TEST_CASE("obj: far from the origin, coordinates are normalised in double") {
+    TempDir dir;
+    SUBCASE("a sphere centred at 1e6 + 0.3 loads with the shape it has at the origin") {
+        std::vector<glm::dvec3> offsets;
+        const Mesh near = objectOf(loadObj(dir.write("near.obj", uvSphereObj(glm::dvec3(0.0), 1.0, offsets))));
+        const double c = 1e6 + 0.3;
+        const Mesh far = objectOf(loadObj(dir.write("far.obj", uvSphereObj(glm::dvec3(c, c, c), 1.0, offsets))));
+        // Expected, in double from the generated offsets: centred on the y axis, on y = 0, size 1.
+        glm::dvec3 lo(1e300), hi(-1e300);
+        for (const glm::dvec3& q : offsets) lo = glm::min(lo, q), hi = glm::max(hi, q);
+        const double extent = std::max(hi.x - lo.x, std::max(hi.y - lo.y, hi.z - lo.z));
+        const glm::dvec3 anchor(0.5 * (lo.x + hi.x), lo.y, 0.5 * (lo.z + hi.z));
+        REQUIRE(near.positions.size() == offsets.size());
+        REQUIRE(far.positions.size() == offsets.size());
+        // (Quad splits may differ: a UV sphere's quads are isosceles trapezoids, diagonals tie.)
+        CHECK(far.triangleCount() == near.triangleCount());
+        CHECK(far.closed);
+        double worst = 0.0, worst_normal = 0.0;
+        for (size_t v = 0; v < offsets.size(); ++v) {
+            const glm::dvec3 expected = (offsets[v] - anchor) / extent;
+            for (const Mesh* mesh : {&near, &far}) {
+                const glm::dvec3 error = glm::abs(glm::dvec3(mesh->positions[v]) - expected);
+                worst = std::max(worst, std::max(error.x, std::max(error.y, error.z)));
+            }
+            worst_normal = std::max(worst_normal, glm::length(glm::dvec3(far.normals[v] - near.normals[v])));
+        }
+        INFO("largest position error " << worst << ", normal difference " << worst_normal << " (size 1)");
+        CHECK(worst <= 1e-6);
+        CHECK(worst_normal <= 1e-5);
+    }
+    SUBCASE("a unit cube centred at 1e8 loads as the unit box on the ground") {
+        std::ostringstream obj;
+        obj.precision(17);
+        for (int corner = 0; corner < 8; ++corner)
+            obj << "v " << 1e8 + ((corner & 1) ? 0.5 : -0.5) << ' ' << 1e8 + ((corner & 2) ? 0.5 : -0.5) << ' '
+                << 1e8 + ((corner & 4) ? 0.5 : -0.5) << '\n';
+        // Outward quads over the corner numbering above (bit 0 = x, bit 1 = y, bit 2 = z), 1-based.
+        obj << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+        const std::string path = dir.write("far_cube.obj", obj.str());
+        const Mesh cube = objectOf(loadObj(path));
+        REQUIRE(cube.positions.size() == 8);
+        CHECK(cube.triangleCount() == 12);
+        CHECK(cube.closed);
+        CHECK(signedVolume(cube) == doctest::Approx(1.0));
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::vec3 expected((corner & 1) ? 0.5f : -0.5f, (corner & 2) ? 1.0f : 0.0f, (corner & 4) ? 0.5f : -0.5f);
+            CHECK(cube.positions[static_cast<size_t>(corner)] == expected);
+        }
+        checkWellFormed(cube, 0.1);
+        // Raw coordinates must be floats: at 1e8 (float spacing 8) the cube is one point, refused
+        // with a message that says so and points at normalisation.
+        ObjOptions raw;
+        raw.normalize = false;
+        const std::string message = errorMessage([&] { loadObj(path, raw); });
+        CHECK(contains(message, path));
+        CHECK(contains(message, "coincide in float"));
+        CHECK(contains(message, "normalize"));
+    }
+}
+
+TEST_CASE("obj: exact duplicate triangles are removed and counted") {
+    TempDir dir;
+    std::string copies = "v 0 0 0\nv 1 0 0\nv 0 0 -1\n";
+    for (int k = 0; k < 10000; ++k) copies += "f 1 2 3\n";
+    const std::string path = dir.write("copies.obj", copies);
+    SUBCASE("10^4 copies of one triangle load as one, reported") {
+        ObjReport report;
+        const Mesh mesh = objectOf(loadObj(path, ObjOptions{}, report));
+        CHECK(mesh.triangleCount() == 1);
+        CHECK(mesh.positions.size() == 3);
+        CHECK(report.duplicate_triangles == 9999);
+        REQUIRE(report.warnings.size() == 1);
+        CHECK(contains(report.warnings[0], "9999 duplicate triangles removed"));
+        // The plain overloads give the same scene.
+        CHECK(sameMesh(objectOf(loadObj(path)), mesh));
+        CHECK(sameMesh(objectOf(parseObj(copies, "copies.obj")), mesh));
+    }
+    SUBCASE("kept on request, still counted") {
+        ObjOptions keep;
+        keep.remove_duplicate_triangles = false;
+        ObjReport report;
+        CHECK(objectOf(loadObj(path, keep, report)).triangleCount() == 10000);
+        CHECK(report.duplicate_triangles == 9999);
+        REQUIRE(report.warnings.size() == 1);
+        CHECK(contains(report.warnings[0], "9999 duplicate triangles kept"));
+    }
+    SUBCASE("same positions in any rotation are duplicates; the reversed winding is not") {
+        // Vertices 4-6 repeat 1-3's positions under other indices; f 1 3 2 is the back face.
+        const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 1 0 0\nv 0 0 -1\nv 0 0 0\n"
+                                "f 1 2 3\nf 2 3 1\nf 3 1 2\nf 6 4 5\nf 1 3 2\nf 4 5 6\n";
+        ObjReport report;
+        const Mesh mesh = objectOf(parseObj(obj, "rotations.obj", ObjOptions{false, false}, report));
+        CHECK(report.duplicate_triangles == 4);
+        REQUIRE(mesh.triangleCount() == 2);
+        CHECK(mesh.positions.size() == 3);  // vertices 4-6 are no longer used
+        // The first occurrence is kept, in file order: the front face, then the back face.
+        CHECK(mesh.indices == std::vector<uint32_t>{0, 1, 2, 0, 2, 1});
+    }
+    SUBCASE("a clean file reports nothing; index-degenerate faces are counted") {
+        ObjReport report;
+        parseObj(kQuadCubeObj, "quad_cube.obj", ObjOptions{}, report);
+        CHECK(report.duplicate_triangles == 0);
+        CHECK(report.repeated_index_triangles == 0);
+        CHECK(report.warnings.empty());
+        parseObj("v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\nf 2 2 3\nf 1 1 1\n", "degenerate.obj", ObjOptions{}, report);
+        CHECK(report.duplicate_triangles == 0);  // a report is reset, not accumulated
+        CHECK(report.repeated_index_triangles == 2);
+        REQUIRE(report.warnings.size() == 1);
+        CHECK(contains(report.warnings[0], "2 triangles repeating a vertex index dropped"));
+    }
+}
+
+TEST_CASE("obj: progress is reported while loading and can cancel") {
+    // 2^17 face lines: enough for calls inside the line and face loops, not only at their ends.
+    std::string text = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nv 0 1 0\n";
+    for (int k = 0; k < (1 << 17); ++k) text += k % 2 ? "f 1 2 3\n" : "f 1 3 4\n";
+    std::vector<double> fractions;
+    ObjOptions options;
+    options.progress = [&](double fraction) {
+        fractions.push_back(fraction);
+        return true;
+    };
+    const Mesh mesh = objectOf(parseObj(text, "progress.obj", options));
+    CHECK(mesh.triangleCount() == 2);
+    REQUIRE(fractions.size() >= 6);
+    CHECK(fractions.back() == 1.0);
+    CHECK(std::is_sorted(fractions.begin(), fractions.end()));
+    CHECK(fractions.front() >= 0.0);
+    size_t inside = 0;
+    for (double f : fractions) inside += f > 0.0 && f < 1.0;
+    CHECK(inside >= 4);
+
+    // Cancelling at any call throws, naming the file and the fraction reached.
+    for (size_t stop : {size_t(0), fractions.size() / 2, fractions.size() - 1}) {
+        INFO("cancel at call " << stop);
+        size_t calls = 0;
+        options.progress = [&](double) { return calls++ < stop; };
+        const std::string message = errorMessage([&] { parseObj(text, "progress.obj", options); });
+        CHECK(contains(message, "parseObj('progress.obj')"));
+        CHECK(contains(message, "cancelled"));
+        CHECK(calls == stop + 1);
+    }
+}
+
 TEST_CASE("obj: shared real meshes (spot closed, teapot)") {
 #ifndef PENUMBRA_SHARED_SCENES_DIR
     MESSAGE("skipped: PENUMBRA_SHARED_SCENES_DIR is not defined");
@@ -795,10 +970,14 @@ TEST_CASE("obj: shared real meshes (spot closed, teapot)") {
             continue;
         }
         INFO(path.string());
-        const Scene scene = loadObj(path.string());
+        ObjReport report;
+        const Scene scene = loadObj(path.string(), ObjOptions{}, report);
         const Mesh& mesh = objectOf(scene);
         MESSAGE(std::string(file) << ": " << mesh.triangleCount() << " triangles, " << mesh.positions.size()
-                     << " vertices, closed = " << mesh.closed);
+                     << " vertices, closed = " << mesh.closed << ", " << report.duplicate_triangles
+                     << " duplicates removed, " << report.warnings.size() << " warnings");
+        CHECK(report.warnings.size() == size_t(report.short_faces > 0) + size_t(report.repeated_index_triangles > 0) +
+                                            size_t(report.duplicate_triangles > 0));
         CHECK(mesh.triangleCount() > 1000);
         checkWellFormed(mesh, 0.0, /*normals_face_front=*/false);
         checkUnitBoxOnGround(mesh);

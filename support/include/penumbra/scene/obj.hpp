@@ -14,11 +14,19 @@
 //     missing .mtl is not an error);
 //   - polygons are triangulated keeping their winding: quads along the shorter diagonal (as
 //     tinyobjloader does), larger polygons by ear clipping in the polygon's Newell plane;
-//   - triangles that repeat a vertex index are dropped, unreferenced vertices are removed;
+//   - faces of fewer than 3 corners and triangles that repeat a vertex index are dropped
+//     (counted in ObjReport), unreferenced vertices are removed;
+//   - exact duplicate triangles (the same three file positions in the same cyclic order as an
+//     earlier triangle, whatever the vertex indices) are removed and counted: a duplicate blocks
+//     the same light, so visibility is unchanged, while every block would test it again. The
+//     reversed winding is not a duplicate: a front/back pair is a two-sided sheet and closes the
+//     edge topology (isClosed);
 //   - file normals are kept only if every use of a position names the same normal (one normal
 //     per vertex); otherwise, or if absent, smooth angle-weighted normals are computed;
 //   - closed = every edge shared by exactly two triangles with opposite orientation; a closed
-//     mesh with negative signed volume (inside-out) is flipped so that it faces outward.
+//     mesh with negative signed volume (inside-out) is flipped so that it faces outward;
+//   - coordinates are parsed, triangulated and normalised in double and only then rounded to
+//     float, so a mesh far from the origin keeps its shape (a float at 1e8 is 8 apart).
 // Before tinyobjloader sees the text, a validating pass reads every statement loadObj uses and
 // rejects, naming the line number and the offending text: numbers that do not parse (strict
 // decimal: `nan`, `inf`, hex and trailing garbage are errors, where tinyobjloader would read 0),
@@ -30,7 +38,9 @@
 // values reach it re-printed in shortest round-trip form, never as the file's text (its number
 // parser overflows int on exponents like `0e-2147483648`, found by obj_fuzz).
 // Failures throw penumbra::Error naming the path (or parseObj's name) and the reason; nothing
-// else escapes (tests/fuzz/obj_fuzz.cpp checks that on arbitrary bytes).
+// else escapes (tests/fuzz/obj_fuzz.cpp checks that on arbitrary bytes). What was dropped or
+// removed is counted in an ObjReport (the overloads that take one), with one warning line per
+// kind; ObjOptions::progress reports progress and can cancel.
 #ifndef PENUMBRA_SCENE_OBJ_HPP
 #define PENUMBRA_SCENE_OBJ_HPP
 
@@ -47,6 +57,7 @@
 #include <climits>
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -60,20 +71,41 @@ namespace penumbra::scene {
 struct ObjOptions {
     bool ground = true;     // add a ground plane under the object
     bool normalize = true;  // scale uniformly so the largest extent is 1, centre on the y axis
-                            // and rest on the ground y = 0; otherwise keep file coordinates and
-                            // put the ground (if any) at the object's lowest y
+                            // and rest on the ground y = 0 (in double); otherwise keep file
+                            // coordinates (rounded to float) and put the ground (if any) at the
+                            // object's lowest y
+    bool remove_duplicate_triangles = true;  // false keeps them (still counted in ObjReport)
+    /// Called on the calling thread with the fraction done (nondecreasing, 0 first, 1 last): at
+    /// each stage and every 65536 lines or faces. Returning false cancels: loading throws
+    /// penumbra::Error saying so. Empty = no calls.
+    std::function<bool(double fraction)> progress = nullptr;
+};
+
+/// What loading changed that the Scene cannot show. Reset by every load that fills it.
+struct ObjReport {
+    size_t short_faces = 0;               // `f` statements with fewer than 3 corners, dropped
+    size_t repeated_index_triangles = 0;  // triangles naming a vertex twice, dropped
+    size_t duplicate_triangles = 0;       // exact duplicates (see the summary), removed unless
+                                          // ObjOptions::remove_duplicate_triangles is false
+    /// One line per nonzero count above, naming the file and the count, in that order.
+    std::vector<std::string> warnings;
 };
 
 /// Loads a Wavefront OBJ file as a Scene (see the summary above for what is kept and how).
 /// Throws penumbra::Error naming `path` when the file cannot be opened or read, a statement is
-/// malformed (the message names its line and value, see the summary), no triangle is left, or
-/// all vertices coincide.
+/// malformed (the message names its line and value, see the summary), no triangle is left, all
+/// used vertices coincide (in double; with normalize = false, in float), or progress cancels.
 inline Scene loadObj(const std::string& path, const ObjOptions& options = {});
+/// The same, filling `report`.
+inline Scene loadObj(const std::string& path, const ObjOptions& options, ObjReport& report);
 
 /// The same from OBJ text in memory (no file access; `mtllib` is ignored like every material).
 /// `name` names the mesh (its stem, as for a path) and the errors.
 inline Scene parseObj(const std::string& text, const std::string& name = "memory.obj",
                       const ObjOptions& options = {});
+/// The same, filling `report`.
+inline Scene parseObj(const std::string& text, const std::string& name, const ObjOptions& options,
+                      ObjReport& report);
 
 /// "builtin:NAME" -> builtin(NAME); anything else is a path for loadObj with default options.
 inline Scene load(const std::string& spec);
@@ -85,7 +117,7 @@ namespace detail {
 
 /// Triangulates one polygon given its corner positions, appending corner-index triples
 /// (0 .. n-1) that keep the polygon's winding, so closed-mesh orientation survives.
-inline void triangulatePolygon(const std::vector<glm::vec3>& corners,
+inline void triangulatePolygon(const std::vector<glm::dvec3>& corners,
                                std::vector<std::array<uint32_t, 3>>& triangles) {
     const uint32_t n = static_cast<uint32_t>(corners.size());
     if (n < 3) return;
@@ -95,7 +127,7 @@ inline void triangulatePolygon(const std::vector<glm::vec3>& corners,
     }
     if (n == 4) {
         // Shorter diagonal: the better split of a non-planar quad, and tinyobjloader's choice.
-        const glm::vec3 d02 = corners[2] - corners[0], d13 = corners[3] - corners[1];
+        const glm::dvec3 d02 = corners[2] - corners[0], d13 = corners[3] - corners[1];
         if (glm::dot(d02, d02) <= glm::dot(d13, d13)) {
             triangles.push_back({0, 1, 2});
             triangles.push_back({0, 2, 3});
@@ -108,7 +140,7 @@ inline void triangulatePolygon(const std::vector<glm::vec3>& corners,
     // Newell's normal is robust for non-planar and concave polygons.
     glm::dvec3 normal(0.0);
     for (uint32_t i = 0; i < n; ++i) {
-        const glm::dvec3 a(corners[i]), b(corners[(i + 1) % n]);
+        const glm::dvec3 a = corners[i], b = corners[(i + 1) % n];
         normal += glm::dvec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x),
                              (a.x - b.x) * (a.y + b.y));
     }
@@ -116,7 +148,7 @@ inline void triangulatePolygon(const std::vector<glm::vec3>& corners,
     for (uint32_t i = 0; i < n; ++i) remaining[i] = i;
     // Ear clipping is O(n^2) per ear; huge polygons (rare in practice) fall back to a fan.
     const bool clip_ears = glm::length(normal) > 0.0 && n <= 256;
-    auto cornerAt = [&](uint32_t k) { return glm::dvec3(corners[remaining[k]]); };
+    auto cornerAt = [&](uint32_t k) { return corners[remaining[k]]; };
     auto side = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& p) {
         return glm::dot(glm::cross(b - a, p - a), normal);
     };
@@ -234,9 +266,27 @@ inline bool parseObjIndex(std::string_view token, long long& value, bool& overfl
     return true;
 }
 
+/// ObjOptions::progress with the cancellation turned into penumbra::Error.
+struct ObjProgress {
+    const std::function<bool(double)>& callback;
+    const std::string& where;
+    void operator()(double fraction) const {
+        if (callback && !callback(fraction))
+            ::penumbra::detail::fail(where, "cancelled by the progress callback at ", 100.0 * fraction, "%");
+    }
+};
+/// Calls per stage loop: one every 2^16 lines or faces.
+inline constexpr size_t kObjProgressMask = 0xffff;
+
 /// The validating pass (see the header summary): returns the text tinyobjloader gets, with the
 /// same line numbering (dropped statements become empty lines); throws naming line and value.
-inline std::string validateObjText(const std::string& text, const std::string& where) {
+/// Also hands back every `v` position in double (tinyobjloader keeps floats) and the number of
+/// faces of fewer than 3 corners (tinyobjloader drops them), and reports progress 0 .. `done`.
+inline std::string validateObjText(const std::string& text, const std::string& where,
+                                   std::vector<glm::dvec3>& positions, size_t& short_faces,
+                                   const ObjProgress& progress, double done) {
+    positions.clear();
+    short_faces = 0;
     // Lines end at \n, \r\n or a lone \r, as in tinyobjloader.
     std::vector<std::string_view> lines;
     {
@@ -269,6 +319,7 @@ inline std::string validateObjText(const std::string& text, const std::string& w
     out.reserve(text.size() + 1);
     for (size_t l = 0; l < lines.size(); ++l) {
         const size_t line_number = l + 1;
+        if ((l & kObjProgressMask) == kObjProgressMask) progress(done * double(l) / double(lines.size()));
         splitObjTokens(lines[l], tokens);
         auto failAt = [&](const auto&... what) { ::penumbra::detail::fail(where, "line ", line_number, ": ", what...); };
         const std::string_view keyword = tokens.empty() ? std::string_view() : tokens[0];
@@ -288,6 +339,7 @@ inline std::string validateObjText(const std::string& text, const std::string& w
                        ", found ", count);
             if (count > max_count)
                 failAt("'", keyword, "' (", kKinds[kind], " ", number, ") has ", count, " values, at most ", max_count);
+            double position[3] = {0.0, 0.0, 0.0};
             for (size_t t = 1; t < tokens.size(); ++t) {
                 double value = 0;
                 bool out_of_range = false;
@@ -302,16 +354,19 @@ inline std::string validateObjText(const std::string& text, const std::string& w
                 if (out_of_range || std::abs(value) > double(FLT_MAX))
                     failAt(kKinds[kind], " ", number, " has a NaN or infinite coordinate: ", quoteObjToken(tokens[t]),
                            " is beyond float range");
+                if (t <= 3) position[t - 1] = value;
                 char printed[32];
                 const std::to_chars_result written = std::to_chars(printed, printed + sizeof printed, value);
                 out += ' ';
                 out.append(printed, written.ptr);
             }
+            if (kind == 0) positions.emplace_back(position[0], position[1], position[2]);
             ++defined[kind];
             out += '\n';
             continue;
         } else if (keyword == "f") {
             if (tokens.size() - 1 > 255) failAt("a face of ", tokens.size() - 1, " corners (at most 255)");
+            if (tokens.size() - 1 < 3) ++short_faces;
             for (size_t t = 1; t < tokens.size(); ++t) {
                 // v, v/vt, v//vn or v/vt/vn
                 const std::string_view corner = tokens[t];
@@ -369,36 +424,88 @@ inline std::string fileStem(const std::string& path) {
     return name.empty() ? std::string("obj") : name;
 }
 
+/// Equal positions get equal ids (exact comparison; -0 equals 0, NaN cannot occur).
+inline std::vector<uint32_t> positionIds(const std::vector<glm::dvec3>& positions) {
+    auto less = [](const glm::dvec3& a, const glm::dvec3& b) {
+        return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z)));
+    };
+    std::vector<uint32_t> order(positions.size());
+    for (size_t v = 0; v < order.size(); ++v) order[v] = static_cast<uint32_t>(v);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return less(positions[a], positions[b]); });
+    std::vector<uint32_t> ids(positions.size());
+    uint32_t id = 0;
+    for (size_t k = 0; k < order.size(); ++k) {
+        if (k > 0 && less(positions[order[k - 1]], positions[order[k]])) ++id;
+        ids[order[k]] = id;
+    }
+    return ids;
+}
+
+/// Marks exact duplicate triangles (same position ids in the same cyclic order as an earlier
+/// triangle); the first occurrence stays, so the result does not depend on sorting.
+inline size_t markDuplicateTriangles(const std::vector<std::array<uint32_t, 3>>& triangles,
+                                     const std::vector<glm::dvec3>& positions, std::vector<bool>& duplicate) {
+    const std::vector<uint32_t> ids = positionIds(positions);
+    std::vector<std::array<uint32_t, 3>> keys(triangles.size());
+    for (size_t t = 0; t < triangles.size(); ++t) {
+        const std::array<uint32_t, 3> id = {ids[triangles[t][0]], ids[triangles[t][1]], ids[triangles[t][2]]};
+        // The least of the three rotations: rotations of one triangle get one key, the
+        // reversed winding another.
+        keys[t] = id;
+        for (size_t r = 1; r < 3; ++r) keys[t] = std::min(keys[t], {id[r], id[(r + 1) % 3], id[(r + 2) % 3]});
+    }
+    std::vector<uint32_t> order(triangles.size());
+    for (size_t t = 0; t < order.size(); ++t) order[t] = static_cast<uint32_t>(t);
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return keys[a] < keys[b] || (keys[a] == keys[b] && a < b); });
+    duplicate.assign(triangles.size(), false);
+    size_t count = 0;
+    for (size_t k = 1; k < order.size(); ++k) {
+        if (keys[order[k]] == keys[order[k - 1]]) {
+            duplicate[order[k]] = true;
+            ++count;
+        }
+    }
+    return count;
+}
+
 inline Scene loadObjText(const std::string& text, const std::string& where, const std::string& stem,
-                         const ObjOptions& options) {
-    std::istringstream stream(validateObjText(text, where));
+                         const ObjOptions& options, ObjReport& report) {
+    report = ObjReport{};
+    const ObjProgress progress{options.progress, where};
+    progress(0.0);
+    // tinyobjloader's positions are floats: ours come from the validating pass, in double.
+    std::vector<glm::dvec3> file_positions;
+    std::istringstream stream(validateObjText(text, where, file_positions, report.short_faces, progress, 0.4));
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> materials;
     std::string warnings, errors;
     // No material reader: materials are ignored, and parsing touches no file. triangulate =
     // false: we triangulate ourselves so winding (hence closedness) is preserved whichever
-    // triangulator the installed tinyobjloader was built with.
+    // triangulator the installed tinyobjloader was built with. Its warnings are not read: with
+    // the statements it gets, the only one is for short faces, which the pass counts.
     const bool parsed = tinyobj::LoadObj(&attrib, &shapes, &materials, &warnings, &errors, &stream,
                                          /*readMatFn=*/nullptr, /*triangulate=*/false);
     PENUMBRA_CHECK(parsed, where, "parse error: ", detail::trimTrailingSpace(errors));
+    progress(0.7);
 
     const size_t vertex_count = attrib.vertices.size() / 3;
     const size_t normal_count = attrib.normals.size() / 3;
-    auto filePosition = [&](size_t v) {
-        return glm::vec3(static_cast<float>(attrib.vertices[3 * v]), static_cast<float>(attrib.vertices[3 * v + 1]),
-                         static_cast<float>(attrib.vertices[3 * v + 2]));
-    };
+    PENUMBRA_CHECK(vertex_count == file_positions.size(), where, "tinyobjloader read ", vertex_count,
+                   " vertices, the validating pass ", file_positions.size());
+    size_t face_count = 0, faces_done = 0;
+    for (const tinyobj::shape_t& shape : shapes) face_count += shape.mesh.num_face_vertices.size();
 
     // Triangles in file vertex indices, plus the normal index each corner named (-1 if none).
     std::vector<std::array<uint32_t, 3>> triangles;
     std::vector<std::array<int, 3>> triangle_normals;
     std::vector<std::array<uint32_t, 3>> local;
-    std::vector<glm::vec3> corners;
+    std::vector<glm::dvec3> corners;
     for (const tinyobj::shape_t& shape : shapes) {
         const std::vector<tinyobj::index_t>& indices = shape.mesh.indices;
         size_t offset = 0;
         for (size_t face = 0; face < shape.mesh.num_face_vertices.size(); ++face) {
+            if ((++faces_done & kObjProgressMask) == 0) progress(0.7 + 0.2 * double(faces_done) / double(face_count));
             const size_t n = shape.mesh.num_face_vertices[face];
             // tinyobjloader stores face sizes as unsigned char: a face of 256+ corners would
             // desynchronise the index stream, which this catches below.
@@ -410,7 +517,7 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
                 PENUMBRA_CHECK(v >= 0 && static_cast<size_t>(v) < vertex_count, where, "face ", face + 1,
                                " of shape '", shape.name, "' uses vertex ", v + 1, " but the file has ",
                                vertex_count, " vertices");
-                corners.push_back(filePosition(static_cast<size_t>(v)));
+                corners.push_back(file_positions[static_cast<size_t>(v)]);
             }
             local.clear();
             detail::triangulatePolygon(corners, local);
@@ -423,8 +530,10 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
                     normals[k] = corner.normal_index;
                 }
                 // A repeated index is no triangle at all and would poison the edge topology.
-                if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[2] == triangle[0])
+                if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[2] == triangle[0]) {
+                    ++report.repeated_index_triangles;
                     continue;
+                }
                 triangles.push_back(triangle);
                 triangle_normals.push_back(normals);
             }
@@ -437,21 +546,42 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
                    shapes.size(), " shapes)");
     PENUMBRA_CHECK(triangles.size() * 3 <= detail::kMaxSceneVertices, where, "too many triangles");
 
+    std::vector<bool> duplicate;
+    report.duplicate_triangles = markDuplicateTriangles(triangles, file_positions, duplicate);
+    if (report.duplicate_triangles > 0 && options.remove_duplicate_triangles) {
+        size_t kept = 0;
+        for (size_t t = 0; t < triangles.size(); ++t) {
+            if (duplicate[t]) continue;
+            triangles[kept] = triangles[t];
+            triangle_normals[kept++] = triangle_normals[t];
+        }
+        triangles.resize(kept);
+        triangle_normals.resize(kept);
+    }
+    progress(0.95);
+
     // Keep used vertices only, in file order, so the mesh bounds are the object's.
     constexpr uint32_t kUnused = UINT32_MAX;
     std::vector<uint32_t> remap(vertex_count, kUnused);
     for (const auto& triangle : triangles)
         for (uint32_t v : triangle) remap[v] = 0;
-    Mesh mesh;
-    mesh.name = stem;
+    std::vector<size_t> used;  // file vertex of each mesh vertex
     for (size_t v = 0; v < vertex_count; ++v) {
         if (remap[v] == kUnused) continue;
-        const glm::vec3 p = filePosition(v);
-        PENUMBRA_CHECK(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z), where, "vertex ",
-                       v + 1, " has a NaN or infinite coordinate (", p.x, ", ", p.y, ", ", p.z, ")");
-        remap[v] = static_cast<uint32_t>(mesh.positions.size());
-        mesh.positions.push_back(p);
+        remap[v] = static_cast<uint32_t>(used.size());
+        used.push_back(v);
     }
+    // Normalised in double, rounded once: the file's digits survive any offset from the origin.
+    glm::dvec3 lo(DBL_MAX), hi(-DBL_MAX);
+    for (size_t v : used) lo = glm::min(lo, file_positions[v]), hi = glm::max(hi, file_positions[v]);
+    const glm::dvec3 size = hi - lo;
+    const double extent = std::max(size.x, std::max(size.y, size.z));
+    PENUMBRA_CHECK(extent > 0.0, where, "all ", used.size(), " used vertices coincide");
+    const glm::dvec3 anchor(0.5 * (lo.x + hi.x), lo.y, 0.5 * (lo.z + hi.z));
+    Mesh mesh;
+    mesh.name = stem;
+    mesh.positions.reserve(used.size());
+    for (size_t v : used) mesh.positions.emplace_back((file_positions[v] - anchor) / extent);
     mesh.indices.reserve(triangles.size() * 3);
     for (const auto& triangle : triangles)
         for (uint32_t v : triangle) mesh.indices.push_back(remap[v]);
@@ -489,6 +619,8 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
         }
     }
 
+    // Topology, orientation and normals from the normalised positions: a uniform scale and a
+    // translation change none of them, and the raw floats may have lost the shape.
     mesh.closed = isClosed(mesh);
     if (mesh.closed && signedVolume(mesh) < 0.0) {
         for (size_t t = 0; t < mesh.indices.size(); t += 3) std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
@@ -510,33 +642,61 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
         computeSmoothNormals(mesh);
     }
 
-    const Bounds box = mesh.bounds();
-    const glm::vec3 size = box.size();
-    const float extent = std::max(size.x, std::max(size.y, size.z));
-    PENUMBRA_CHECK(std::isfinite(extent), where, "coordinates too large (extent overflows float)");
-    PENUMBRA_CHECK(extent > 0.0f, where, "all ", mesh.positions.size(), " used vertices coincide");
-    float ground_y = box.min.y;
-    if (options.normalize) {
-        detail::fitUnitBoxOnGround(mesh);
-        ground_y = 0.0f;
+    float ground_y = 0.0f;
+    if (!options.normalize) {
+        for (size_t k = 0; k < used.size(); ++k) mesh.positions[k] = glm::vec3(file_positions[used[k]]);
+        const Bounds box = mesh.bounds();
+        const glm::vec3 float_size = box.size();
+        const float float_extent = std::max(float_size.x, std::max(float_size.y, float_size.z));
+        PENUMBRA_CHECK(std::isfinite(float_extent), where, "coordinates too large (extent overflows float)");
+        PENUMBRA_CHECK(float_extent > 0.0f, where, "all ", used.size(), " used vertices coincide in float (extent ",
+                       extent, " at distance ", std::max(glm::length(lo), glm::length(hi)),
+                       " from the origin); normalize = true keeps the shape");
+        ground_y = box.min.y;
     }
-    return sceneFromMesh(std::move(mesh), ground_y, options.ground);
+
+    std::string prefix = where;
+    if (report.short_faces > 0)
+        report.warnings.push_back(prefix + std::to_string(report.short_faces) + " faces of fewer than 3 corners dropped");
+    if (report.repeated_index_triangles > 0)
+        report.warnings.push_back(prefix + std::to_string(report.repeated_index_triangles) +
+                                  " triangles repeating a vertex index dropped");
+    if (report.duplicate_triangles > 0)
+        report.warnings.push_back(prefix + std::to_string(report.duplicate_triangles) + " duplicate triangles " +
+                                  (options.remove_duplicate_triangles
+                                       ? "removed (they repeat an earlier triangle's positions and block the same light)"
+                                       : "kept (remove_duplicate_triangles = false): each is tested again"));
+    Scene scene = sceneFromMesh(std::move(mesh), ground_y, options.ground);
+    progress(1.0);
+    return scene;
 }
 
 }  // namespace detail
 
-inline Scene loadObj(const std::string& path, const ObjOptions& options) {
+inline Scene loadObj(const std::string& path, const ObjOptions& options, ObjReport& report) {
     const std::string where = "penumbra::scene::loadObj('" + path + "'): ";
     std::ifstream file(path, std::ios::binary);
     PENUMBRA_CHECK(file.is_open(), where, "cannot open file");
     std::ostringstream text;
     text << file.rdbuf();
     PENUMBRA_CHECK(!file.bad(), where, "cannot read file");
-    return detail::loadObjText(text.str(), where, detail::fileStem(path), options);
+    return detail::loadObjText(text.str(), where, detail::fileStem(path), options, report);
+}
+
+inline Scene loadObj(const std::string& path, const ObjOptions& options) {
+    ObjReport report;
+    return loadObj(path, options, report);
+}
+
+inline Scene parseObj(const std::string& text, const std::string& name, const ObjOptions& options,
+                      ObjReport& report) {
+    return detail::loadObjText(text, "penumbra::scene::parseObj('" + name + "'): ", detail::fileStem(name), options,
+                               report);
 }
 
 inline Scene parseObj(const std::string& text, const std::string& name, const ObjOptions& options) {
-    return detail::loadObjText(text, "penumbra::scene::parseObj('" + name + "'): ", detail::fileStem(name), options);
+    ObjReport report;
+    return parseObj(text, name, options, report);
 }
 
 inline Scene load(const std::string& spec) {
