@@ -1,6 +1,7 @@
-// penumbra — l_bend per vertex (sintorn2008 §4.3) into a float buffer: one dispatch of
-// ceil(vertex_count / 64) groups whenever the light moves; the vertex stage then reads it as an
-// attribute. Bindings: PENUMBRA_BENT_BINDING_* of bent_normals_shared.h.
+// penumbra — l_bend per bent vertex (sintorn2008 §4.3) into a float buffer: one dispatch of
+// ceil(bent vertices / 64) groups whenever the light moves; the vertex stage, drawing with
+// BentNormalMesh::indices, then reads it as an attribute. Positions stay per input vertex (source
+// maps a bent vertex to its). Bindings: PENUMBRA_BENT_BINDING_* of bent_normals_shared.h.
 #include "penumbra/bent_normals/bent_normals_shared.h"
 
 layout(local_size_x = PENUMBRA_BENT_GROUP_SIZE) in;
@@ -10,6 +11,9 @@ layout(std140, binding = PENUMBRA_BENT_BINDING_PARAMS) uniform PenumbraBentParam
 };
 layout(std430, binding = PENUMBRA_BENT_BINDING_POSITIONS) readonly buffer PenumbraBentPositions {
     vec4 penumbraBentPositions[];
+};
+layout(std430, binding = PENUMBRA_BENT_BINDING_SOURCE) readonly buffer PenumbraBentSource {
+    uint penumbraBentSource[];
 };
 layout(std430, binding = PENUMBRA_BENT_BINDING_OFFSETS) readonly buffer PenumbraBentOffsets {
     uint penumbraBentOffsets[];
@@ -32,6 +36,6 @@ layout(std430, binding = PENUMBRA_BENT_BINDING_OUTPUT) writeonly buffer Penumbra
 void main() {
     const uint v = gl_GlobalInvocationID.x;
     if (v >= penumbraBentParams.vertex_count) return;
-    penumbraBentOutput[v] = penumbraBentLight(v, penumbraBentPositions[v].xyz, penumbraBentParams.light.xyz,
-                                              penumbraBentParams.light.w);
+    const vec3 position = penumbraBentPositions[penumbraBentSource[v]].xyz;
+    penumbraBentOutput[v] = penumbraBentLight(v, position, penumbraBentParams.light.xyz, penumbraBentParams.light.w);
 }

@@ -6,8 +6,9 @@
 //   PENUMBRA_BENT_OFFSET(v)       -> uint: BentNormalMesh::offsets[v]
 //   PENUMBRA_BENT_FACE(i)         -> uint: BentNormalMesh::faces[i]
 //   PENUMBRA_BENT_FACE_NORMAL(f)  -> vec3: BentNormalMesh::face_normals[f].xyz
-// Use: per vertex l_bend = penumbraBentLight(vertex, position, light centre, light radius) (or read
-// bent_normals.comp.glsl's output), interpolate it, then per fragment
+// Use: per bent vertex l_bend = penumbraBentLight(bent vertex, position, light centre, light radius)
+// (or read bent_normals.comp.glsl's output), draw with BentNormalMesh::indices so each corner gets
+// its smooth group's value, interpolate it, then per fragment
 // direct = penumbraBentDirect(l_bend, your diffuse term, 3.0) in place of max(diffuse, 0).
 #ifndef PENUMBRA_BENT_NORMALS_GLSL
 #define PENUMBRA_BENT_NORMALS_GLSL
