@@ -13,8 +13,9 @@
 // + penumbraLutResolve: exact answers, the uncertain samples tested against the plane) and 3
 // (penumbraExactBehind, all 128 samples). Each entry also times the exact kernel on the same planes,
 // interleaved: speedup_vs_exact = exact time / this entry's time. Counters: err_bits = fraction of
-// the valid bits that differ from the double-precision exact test (exactBehind<double> of the float
-// plane), uncertain_bits = fraction of uncertain bits (certified LUT; 0 for the others),
+// the valid bits that differ from the fp64 oracle on the kernels' own inputs (exactBehindOracle: the
+// float plane, the float samples; must be 0 for Certified and ExactBehind),
+// uncertain_bits = fraction of uncertain bits (certified LUT; 0 for the others),
 // memory_bytes = the LUT (the float samples for ExactBehind), tests = M x tables, ns_per_test.
 // llvmpipe runs the kernels on the CPU cores: the ratios, not the times, carry over to GPUs.
 // Example: penumbra_bench --benchmark_filter='BM_Lut|BM_Exact'
@@ -128,7 +129,7 @@ struct LookupWorld {
     penumbra::LightLutSetup setup;
     penumbra::gl::Buffer lut, params, samples, planes, rotations, results, exact_results;
     std::vector<glm::vec4> plane_values;
-    std::vector<penumbra::LutMask> reference;  ///< exactBehind<double> per (plane, table)
+    std::vector<penumbra::LutMask> reference;  ///< exactBehindOracle per (plane, table)
     uint64_t valid_bits = 0, uncertain_bits = 0;
     uint64_t entries = 0;
 
@@ -163,7 +164,8 @@ struct LookupWorld {
         reference.resize(entries);
         for (size_t k = 0; k < plane_count; ++k)
             for (uint32_t t = 0; t < setup.params.tables; ++t) {
-                reference[k * setup.params.tables + t] = penumbra::exactBehind(setup, t, glm::dvec4(plane_values[k]));
+                // The samples buffer is setup.samples rounded to float, as exactBehindOracle rounds them.
+                reference[k * setup.params.tables + t] = penumbra::exactBehindOracle(setup, t, plane_values[k]);
                 valid_bits += uint64_t(popcount(penumbra::lightLutValidMask(setup.params, t)));
                 if (certified) {
                     uncertain_bits += uint64_t(popcount(

@@ -4,7 +4,8 @@
 // of distance cells, a narrow grid), poisoned outputs with guard words; the GLSL lookups of
 // lookup.glsl through their hooks (tests/shaders/light_lut/lookup_test.comp.glsl) against the CPU
 // twins bit for bit over random planes (lightLutLookup<float>, exactBehind<float>, lutCombine,
-// lutResolve, the rotation), certified-resolved == exact; the RGBA32UI texture helper; setup
+// lutResolve, the rotation), certified-resolved == exact == exactBehindOracle (fp64 on the same
+// float inputs; issue 41 item 10's plane on the GPU); the RGBA32UI texture helper; setup
 // errors and the per-call Status of every misuse; a missing hook failing to compile with its name.
 //
 // Bit identity of the lookups needs correctly rounded float +, *, /, sqrt (llvmpipe); the table
@@ -242,7 +243,7 @@ glm::vec4 rotateTwin(const glm::vec4& p, float c, float s) {
 
 struct LookupTally {
     uint64_t entries = 0, bad_planes = 0, behind = 0, certain = 0, uncertain = 0, exact = 0, resolve = 0, combine = 0, locate = 0,
-             rotate = 0, resolved_not_exact = 0, resolved_not_exact_double = 0;
+             rotate = 0, resolved_not_exact = 0, resolved_not_oracle = 0, exact_not_oracle = 0;
 };
 
 LookupTally compareLookups(const penumbra::LightLutSetup& setup, const std::vector<uint32_t>& lut,
@@ -280,7 +281,10 @@ LookupTally compareLookups(const penumbra::LightLutSetup& setup, const std::vect
                 continue;
             }
             t.resolved_not_exact += mask(g[4]) != mask(g[3]);
-            t.resolved_not_exact_double += mask(g[4]) != penumbra::exactBehind(setup, table, dvec4(plane));
+            // The fp64 oracle on the same float samples and plane the GPU used (issue 41 item 10).
+            const penumbra::LutMask oracle = penumbra::exactBehindOracle(setup, table, plane);
+            t.resolved_not_oracle += mask(g[4]) != oracle;
+            t.exact_not_oracle += mask(g[3]) != oracle;
         }
     return t;
 }
@@ -416,8 +420,8 @@ void lookupIdentity(size_t count) {
         MESSAGE(std::string(c.name), ": ", t.entries, " (plane, table) lookups; GPU != twin: behind ", t.behind, ", certain ",
                 t.certain, ", uncertain ", t.uncertain, ", exact ", t.exact, ", resolve ", t.resolve, ", combine ",
                 t.combine, ", locate ", t.locate, ", rotate ", t.rotate, "; resolved != exact float ",
-                t.resolved_not_exact, ", != exact double ", t.resolved_not_exact_double, " (", t.bad_planes,
-                " bad planes excluded)");
+                t.resolved_not_exact, "; != fp64 oracle: resolved ", t.resolved_not_oracle, ", exact ", t.exact_not_oracle,
+                " (", t.bad_planes, " bad planes excluded)");
         PENUMBRA_CHECK_BITWISE("lookup.glsl exactBehind GPU == CPU twin", t.exact == 0);
         PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraLutRotate GPU == CPU twin", t.rotate == 0);
         CHECK(t.exact * 100 <= t.entries);
@@ -427,6 +431,10 @@ void lookupIdentity(size_t count) {
             for (uint64_t wrong : {t.locate, t.behind, t.certain, t.uncertain, t.resolve, t.combine}) CHECK(wrong * 100 <= t.entries);
         }
         if (c.options.certified) CHECK(t.resolved_not_exact == 0);
+        // The float filter's fallback is fp64: the oracle's verdict where fp64 + and * are IEEE.
+        PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraExactBehind == exactBehindOracle", t.exact_not_oracle == 0);
+        if (c.options.certified)
+            PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraLutResolve == exactBehindOracle", t.resolved_not_oracle == 0);
     }
 }
 
@@ -434,6 +442,39 @@ void lookupIdentity(size_t count) {
 
 TEST_CASE("lookup.glsl: GLSL lookups equal the CPU twins bit for bit; certified + resolve is exact") {
     lookupIdentity(20000);
+}
+
+TEST_CASE("lookup.glsl: issue 41 item 10's plane: certified + resolve and the exact test give the fp64 oracle's bit") {
+    context();
+    // BM_LutLookupCertified/64/512's one wrong bit: plane 56000, table 3, bit 31. Exact value on
+    // these float inputs -2.4893796357616793e-08 (Python fractions): behind; float rounds it to 0.
+    const glm::vec4 plane(-0x1.b5fd3p-1f, -0x1.d51bp-2f, -0x1.eeaf9ep-3f, 0x1.d44ce4p-2f);
+    const penumbra::LightLutSetup setup = penumbra::lightLutSetup(
+        penumbra::reference::sphereLightSamples(dvec3(0.0), 0.999, 512, 20261201u), 512, lutOptions(64, true));
+    REQUIRE(glm::vec3(setup.samples[3 * 128 + 31]) == glm::vec3(0x1.6f1ad4p-2f, 0x1.44ee3p-1f, -0x1.28ef46p-1f));
+    // Only the texel this plane reads (table 3) is filled: the whole LUT takes seconds on the CPU.
+    const penumbra::LutCell cell = penumbra::lightLutLocate(setup.params, plane);
+    REQUIRE(cell.trivial == 0);
+    std::vector<uint32_t> words(setup.texelCount() * 4, 0u);
+    const penumbra::LutAnswer texel = penumbra::lightLutTexel(setup, 3, cell.texel);
+    const uint64_t centre_at = (3ull * setup.params.texels_per_table + cell.texel) * 4;
+    std::copy(texel.centre.begin(), texel.centre.end(), words.begin() + static_cast<std::ptrdiff_t>(centre_at));
+    std::copy(texel.uncertain.begin(), texel.uncertain.end(),
+              words.begin() + static_cast<std::ptrdiff_t>(centre_at + uint64_t(setup.params.uncertain_offset) * 4));
+    REQUIRE(((texel.uncertain[0] >> 31) & 1u) == 1u);  // the lookup leaves the sample to the exact test
+    penumbra::gl::Buffer lut = penumbra::gl::Buffer::fromVector(words);
+    const std::vector<glm::uvec4> gpu = LookupKernel(0).run(setup, lut.id(), {plane}, {glm::vec2(1.0f, 0.0f)});
+    const glm::uvec4* g = &gpu[9 * 3];
+    const penumbra::LutMask oracle = penumbra::exactBehindOracle(setup, 3, plane);
+    CHECK(((oracle[0] >> 31) & 1u) == 1u);
+    CHECK(((g[4].x >> 31) & 1u) == 1u);  // penumbraLutResolve
+    CHECK(((g[3].x >> 31) & 1u) == 1u);  // penumbraExactBehind
+    PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraLutResolve == exactBehindOracle", mask(g[4]) == oracle);
+    PENUMBRA_CHECK_BITWISE("lookup.glsl penumbraExactBehind == exactBehindOracle", mask(g[3]) == oracle);
+    // The CPU twins agree.
+    CHECK(penumbra::lutResolve(setup, 3, penumbra::lutCertain(penumbra::lightLutLookup(setup.params, words.data(), 3, plane)),
+                               plane) == oracle);
+    CHECK(penumbra::exactBehind(setup, 3, plane) == oracle);
 }
 
 TEST_CASE("LightLutGenerator: setup errors and per-call misuse") {

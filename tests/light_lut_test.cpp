@@ -7,7 +7,9 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <bitset>
+#include <cmath>
 #include <random>
 
 using glm::dvec3;
@@ -344,4 +346,83 @@ TEST_CASE("light lut: a rotated plane answers for rotated samples") {
         // rotation's rounding, far below the tolerance).
         REQUIRE(andNot(xorMask(certain.behind, exact), certain.uncertain) == penumbra::LutMask{});
     }
+}
+
+namespace {
+
+// Issue 41 item 10: BM_LutLookupCertified/64/512 had one wrong bit, plane 56000 (of its 65 536),
+// table 3, bit 31 (sample 415). Exact value on these float inputs (Python fractions):
+// dot(n, q) + w = -2.4893796357616793e-08 < 0, behind; the float evaluation rounds it to 0.
+const glm::vec4 kIssuePlane(-0x1.b5fd3p-1f, -0x1.d51bp-2f, -0x1.eeaf9ep-3f, 0x1.d44ce4p-2f);
+const glm::vec3 kIssueSample(0x1.6f1ad4p-2f, 0x1.44ee3p-1f, -0x1.28ef46p-1f);
+
+bool bit(const penumbra::LutMask& m, uint32_t b) { return (m[b >> 5] >> (b & 31)) & 1u; }
+
+}  // namespace
+
+TEST_CASE("light lut: the float exact test is fp64's on the float inputs (issue 41 item 10's plane and sample)") {
+    using penumbra::detail::dotRounded;
+    // The trap: the float evaluation is exactly 0, so "strictly behind" says no.
+    CHECK(dotRounded(glm::vec3(kIssuePlane), kIssueSample) + kIssuePlane.w == 0.0f);
+    // Hand case: sample 0 is the issue's sample, the others the centre (0 + w > 0: in front).
+    std::vector<dvec3> samples(32, dvec3(0.0));
+    samples[0] = dvec3(kIssueSample);
+    penumbra::LightLutOptions options;
+    options.resolution = 16;
+    options.certified = true;
+    const penumbra::LightLutSetup hand = penumbra::lightLutSetup(samples, 32, options);
+    const penumbra::LutMask want{1u, 0u, 0u, 0u};
+    CHECK(penumbra::exactBehindOracle(hand, 0, kIssuePlane) == want);
+    CHECK(penumbra::exactBehind(hand, 0, kIssuePlane) == want);
+    CHECK(penumbra::exactBehind(hand, 0, -kIssuePlane) == penumbra::LutMask{~1u, 0u, 0u, 0u});  // w < 0: the centre is behind
+    penumbra::LutCertain all_uncertain;
+    all_uncertain.uncertain = {~0u, 0u, 0u, 0u};
+    CHECK(penumbra::lutResolve(hand, 0, all_uncertain, kIssuePlane) == want);
+
+    // The benchmark's own LUT (BM_LutLookupCertified/64/512): the sample is bit 31 of table 3, the
+    // lookup leaves it uncertain, and resolving it gives the oracle's mask.
+    options.resolution = 64;
+    const penumbra::LightLutSetup setup = penumbra::lightLutSetup(
+        penumbra::reference::sphereLightSamples(dvec3(0.0), 0.999, 512, 20261201u), 512, options);
+    REQUIRE(glm::vec3(setup.samples[3 * 128 + 31]) == kIssueSample);
+    const penumbra::LutCell cell = penumbra::lightLutLocate(setup.params, kIssuePlane);
+    REQUIRE(cell.trivial == 0);
+    std::vector<uint32_t> words(setup.texelCount() * 4, 0u);  // only the texel the lookup reads
+    const penumbra::LutAnswer texel = penumbra::lightLutTexel(setup, 3, cell.texel);
+    std::copy(texel.centre.begin(), texel.centre.end(), words.begin() + (3ull * setup.params.texels_per_table + cell.texel) * 4);
+    std::copy(texel.uncertain.begin(), texel.uncertain.end(),
+              words.begin() + (uint64_t(setup.params.uncertain_offset) + 3ull * setup.params.texels_per_table + cell.texel) * 4);
+    const penumbra::LutCertain c = penumbra::lutCertain(penumbra::lightLutLookup(setup.params, words.data(), 3, kIssuePlane));
+    CHECK(bit(c.uncertain, 31));
+    const penumbra::LutMask oracle = penumbra::exactBehindOracle(setup, 3, kIssuePlane);
+    CHECK(bit(oracle, 31));
+    CHECK(penumbra::lutResolve(setup, 3, c, kIssuePlane) == oracle);
+    CHECK(penumbra::exactBehind(setup, 3, kIssuePlane) == oracle);
+}
+
+TEST_CASE("light lut: the float exact test equals the oracle on planes within float noise of a sample") {
+    // Planes through a sample, moved by a few float ulps: the float evaluation alone is wrong on
+    // a good share of them; the filtered test never is.
+    std::mt19937_64 rng(penumbra::test::testSeed());
+    penumbra::LightLutOptions options;
+    options.resolution = 16;
+    const penumbra::LightLutSetup setup = penumbra::lightLutSetup(ballSets(128, 1), 128, options);
+    std::uniform_int_distribution<int> sample(0, 127), ulps(-8, 8);
+    std::uniform_real_distribution<double> scale(0.01, 100.0);
+    uint64_t naive_wrong = 0, planes = 0;
+    for (int k = 0; k < 50000; ++k) {
+        const int b = sample(rng);
+        const glm::vec3 q(setup.samples[size_t(b)]);
+        const dvec3 n = glm::normalize(dvec3(randomPlane(rng))) * scale(rng);
+        float w = float(-glm::dot(n, dvec3(q)));
+        for (int u = ulps(rng); u != 0; u += u > 0 ? -1 : 1) w = std::nextafter(w, u > 0 ? INFINITY : -INFINITY);
+        const glm::vec4 plane(glm::vec3(n), w);
+        const penumbra::LutMask oracle = penumbra::exactBehindOracle(setup, 0, plane);
+        const bool naive = penumbra::detail::dotRounded(glm::vec3(plane), q) + plane.w < 0.0f;
+        naive_wrong += naive != bit(oracle, uint32_t(b));
+        ++planes;
+        REQUIRE(penumbra::exactBehind(setup, 0, plane) == oracle);
+    }
+    MESSAGE(planes << " planes: the float evaluation alone misjudges " << naive_wrong << " of their samples");
+    CHECK(naive_wrong > 0);  // the planes do reach the float noise
 }

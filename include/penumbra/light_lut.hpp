@@ -15,7 +15,8 @@
 //             the three small arrays the GPU generator reads (samples, normal cells, distance cells);
 //             generateLightLut(): the tables on the CPU (multithreaded, progress, cancellation),
 //             byte-identical to the GPU generator's; lightLutLookup()/lightLutLocate(): the lookup,
-//             CPU twin of lookup.glsl; exactBehind(): the ground truth.
+//             CPU twin of lookup.glsl; exactBehind(): the ground truth; exactBehindOracle(): the
+//             same on the GPU's float inputs, what the exact modes are checked against.
 //
 // Layout. One table per 128 samples of one set: table t = set * tables_per_set + block answers the
 // set's samples 128 * block ... 128 * block + 127 (bits past N are 0). A table is R_d slices of
@@ -61,6 +62,15 @@
 // every desktop GPU with fp64). The setup's arrays use sqrt and the library-independent sin/cos of
 // light_samples.hpp, so they are the same on every IEEE-754 platform.
 //
+// Exact side test (exactBehind<float>, lookup.glsl penumbraLutSampleBehind; what lutResolve uses).
+// The reference is exactBehindOracle: the sign of dot(n, q) + w in fp64 on the float plane and the
+// float samples (what the GPU has). A float evaluation s_f alone is not it: it rounds to 0 or flips
+// within ~1e-7 of the plane. With u = 2^-23 (GLSL 4.50 §4.7.1: float +, * correctly rounded in an
+// unspecified mode; fp64 charged the same u) both evaluations pass every term through <= 4
+// roundings: |s - X| <= gamma_4 P, X exact, P = sum |n_i q_i| + |w| <= |n|_1 + |w| (|q_i| <= 1).
+// So |s_f| > B = REL (|n|_1 + |w|) + ABS >= 2 gamma_4 P (+ flushed denormals: ABS) gives s_f, X and
+// the fp64 value one nonzero sign; below B the fp64 value itself decides (light_lut_shared.h).
+//
 // Bad input (penumbra::Error at setup, naming the value): N not a multiple of 32 or outside 32..1024,
 // sets 0, resolution outside 16..256 or odd, tolerance not in [0, 1e-2], a sample not finite or with
 // |q| > 1 - 2^-20, a table beyond 2^32 uvec4s. Per lookup (no throw): a plane with a non-finite value
@@ -88,6 +98,7 @@
 #include <cstdint>
 #include <functional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace penumbra {
@@ -234,6 +245,25 @@ inline void texel(const LightLutSetup& setup, uint32_t table, uint32_t texel_ind
         if (v < 0.0) centre[b >> 5] |= 1u << (b & 31);
         if (!(a > 0.0 && mulRounded(a, a) > reach2)) uncertain[b >> 5] |= 1u << (b & 31);
     }
+}
+
+/// B of the exact side test for a float plane (twin of penumbraLutExactBound).
+inline float exactBound(const glm::vec4& plane) {
+    const float s = ((std::fabs(plane.x) + std::fabs(plane.y)) + std::fabs(plane.z)) + std::fabs(plane.w);
+    return mulRounded(float(PENUMBRA_LUT_EXACT_REL), s) + float(PENUMBRA_LUT_EXACT_ABS);
+}
+
+/// dot(n, q) + w < 0 in fp64 on float inputs: the products are exact, the sums round once each.
+inline bool behindFp64(const glm::vec4& plane, const glm::vec3& q) {
+    return dotRounded(glm::dvec3(plane), glm::dvec3(q)) + double(plane.w) < 0.0;
+}
+
+/// The exact side test (twin of penumbraLutSampleBehindBounded): the float value where it clears
+/// `bound`, else fp64. NaN fails the filter and goes to fp64, as in GLSL.
+inline bool behindFiltered(const glm::vec4& plane, float bound, const glm::vec3& q) {
+    const float s = dotRounded(glm::vec3(plane), q) + plane.w;
+    if (std::fabs(s) > bound) return s < 0.0f;
+    return behindFp64(plane, q);
 }
 
 inline LutMask complement(const LutMask& m, const LutMask& valid) {
@@ -519,17 +549,42 @@ inline glm::vec<4, Real> lightLutRotate(const glm::vec<4, Real>& plane, Real cos
 }
 
 /// The ground truth: bits of the samples of table `table` strictly behind the plane (n need not
-/// be unit: only the sign of dot(n, q) + w counts). CPU twin of penumbraExactBehind.
+/// be unit: only the sign of dot(n, q) + w counts). Real = double: fp64 on the setup's double
+/// samples; Real = float: the CPU twin of penumbraExactBehind, on the samples rounded to float, equal
+/// to exactBehindOracle (header, "Exact side test").
 template <typename Real>
 inline LutMask exactBehind(const LightLutSetup& setup, uint32_t table, const glm::vec<4, Real>& plane) {
     LutMask m{};
     const shared::PenumbraLutParams& p = setup.params;
     const uint32_t block = table % p.tables_per_set;
     const uint32_t count = std::min<uint32_t>(128u, p.samples_per_set - block * 128u);
-    const glm::vec<3, Real> n(plane);
+    if constexpr (std::is_same_v<Real, float>) {
+        const float bound = detail::light_lut::exactBound(plane);
+        for (uint32_t b = 0; b < count; ++b) {
+            const glm::vec3 q(setup.samples[size_t(table) * 128u + b]);
+            if (detail::light_lut::behindFiltered(plane, bound, q)) m[b >> 5] |= 1u << (b & 31);
+        }
+    } else {
+        const glm::vec<3, Real> n(plane);
+        for (uint32_t b = 0; b < count; ++b) {
+            const glm::vec<3, Real> q(setup.samples[size_t(table) * 128u + b]);
+            if (detail::dotRounded(n, q) + plane.w < Real(0)) m[b >> 5] |= 1u << (b & 31);
+        }
+    }
+    return m;
+}
+
+/// The oracle for lookups on the GPU's inputs: fp64 on the float plane and the setup's samples
+/// rounded to float (what PENUMBRA_LUT_SAMPLE hands lookup.glsl). Exact modes are checked against
+/// it: exactBehind<float>, penumbraExactBehind and penumbraLutResolve must equal it.
+inline LutMask exactBehindOracle(const LightLutSetup& setup, uint32_t table, const glm::vec4& plane) {
+    LutMask m{};
+    const shared::PenumbraLutParams& p = setup.params;
+    const uint32_t block = table % p.tables_per_set;
+    const uint32_t count = std::min<uint32_t>(128u, p.samples_per_set - block * 128u);
     for (uint32_t b = 0; b < count; ++b) {
-        const glm::vec<3, Real> q(setup.samples[size_t(table) * 128u + b]);
-        if (detail::dotRounded(n, q) + plane.w < Real(0)) m[b >> 5] |= 1u << (b & 31);
+        const glm::vec3 q(setup.samples[size_t(table) * 128u + b]);
+        if (detail::light_lut::behindFp64(plane, q)) m[b >> 5] |= 1u << (b & 31);
     }
     return m;
 }

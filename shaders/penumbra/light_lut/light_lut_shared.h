@@ -21,6 +21,11 @@ namespace penumbra::shared {
 #define PENUMBRA_LUT_FLAG_SYMMETRIC 1  // cells cover d in [0, 1]; (n, d < 0) reads (-n, -d), complemented
 #define PENUMBRA_LUT_FLAG_CERTIFIED 2  // an uncertain mask follows the centre masks
 
+// The exact side test's float filter (lookup.glsl penumbraLutExactBound, light_lut.hpp): the float
+// value of dot(n, q) + w decides when its magnitude exceeds REL (|n|_1 + |w|) + ABS, else fp64 does.
+#define PENUMBRA_LUT_EXACT_REL 1.0e-6   // > 2 gamma_4 (1 + 5u) = 9.54e-7, u = 2^-23: both paths' rounding
+#define PENUMBRA_LUT_EXACT_ABS 1.0e-36  // > 2^-121 = 3.8e-37: flushed denormals (inputs and results)
+
 // Default bindings of generate.comp.glsl (penumbra::LightLutBindings can move them).
 #define PENUMBRA_LUT_BINDING_SAMPLES 0       // dvec4 per sample: local x, y, z, |q| (rounded up)
 #define PENUMBRA_LUT_BINDING_NORMAL_CELLS 1  // dvec4 per normal cell: centre normal, rho

@@ -3,9 +3,11 @@
 // twins in include/penumbra/light_lut.hpp, operation for operation (`precise` here, opaque products
 // there): penumbraLutLocate = lightLutLocate<float>, penumbraLutLookup = lightLutLookup<float>
 // (= penumbraLutLookupCell / penumbraLutCentreCell at penumbraLutLocate's cell, the split a caller
-// uses to locate a plane once for several tables),
-// penumbraExactBehind = exactBehind<float>, penumbraLutCombine = lutCombine, penumbraLutResolve =
-// lutResolve, penumbraLutValidMask = lightLutValidMask. With correctly rounded float +, *, / and
+// uses to locate a plane once for several tables), penumbraExactBehind = exactBehind<float>,
+// penumbraLutCombine = lutCombine, penumbraLutResolve = lutResolve, penumbraLutValidMask =
+// lightLutValidMask. The exact test and resolve equal exactBehindOracle (fp64 on the float inputs)
+// wherever fp64 + and * are IEEE (a float filter decides, fp64 only near the plane); on any
+// conforming driver, every bit the filter decides is the oracle's. With correctly rounded float +, *, / and
 // sqrt (llvmpipe, most desktop GPUs) the octahedral lookups equal the twins bit for bit; the
 // two-angle mapping uses acos/atan, whose GLSL precision is unspecified, so there the cell may
 // differ near cell borders (the certificate covers that only when the driver is within
@@ -23,7 +25,8 @@
 //                                     texels_per_table + texel, + uncertain_offset for the
 //                                     uncertain masks)
 //   PENUMBRA_LUT_SAMPLE(table, bit) -> vec3, sample `bit` of table `table` in the light's
-//                                     normalised space, as float (for the exact test and resolve)
+//                                     normalised space, as float (for the exact test and resolve;
+//                                     every |coordinate| <= 1, which its error bound relies on)
 #ifndef PENUMBRA_LIGHT_LUT_LOOKUP_GLSL
 #define PENUMBRA_LIGHT_LUT_LOOKUP_GLSL
 
@@ -158,19 +161,38 @@ uvec4 penumbraLutBehindCertified(vec4 plane, uint table, out uvec4 uncertain) {
     return centre & ~uncertain;
 }
 
-// The exact side of one sample: dot(n, q) + w < 0, products rounded (exactBehind<float>).
-bool penumbraLutSampleBehind(vec4 plane, uint table, uint bit) {
+// The error bound of the float side test for `plane` (detail::light_lut::exactBound): the float
+// value of dot(n, q) + w with |s| above it has the fp64 value's sign (proof in light_lut.hpp,
+// "Exact side test"). Computed once per plane; NaN or Inf planes give no bound that passes.
+float penumbraLutExactBound(vec4 plane) {
+    precise float s = ((abs(plane.x) + abs(plane.y)) + abs(plane.z)) + abs(plane.w);
+    precise float b = float(PENUMBRA_LUT_EXACT_REL) * s + float(PENUMBRA_LUT_EXACT_ABS);
+    return b;
+}
+
+// The exact side of one sample, dot(n, q) + w < 0 (exactBehind<float>, = exactBehindOracle): the
+// float value where it clears `bound`, else the fp64 value (products of floats are exact in fp64).
+// A float value alone is not exact: it rounds to 0 or flips sign within ~1e-7 of the plane.
+bool penumbraLutSampleBehindBounded(vec4 plane, float bound, uint table, uint bit) {
     const vec3 q = PENUMBRA_LUT_SAMPLE(table, bit);
     precise float s = ((plane.x * q.x + plane.y * q.y) + plane.z * q.z) + plane.w;
-    return s < 0.0;
+    if (abs(s) > bound) return s < 0.0;
+    precise double sd = ((double(plane.x) * double(q.x) + double(plane.y) * double(q.y)) + double(plane.z) * double(q.z)) +
+                        double(plane.w);
+    return sd < 0.0LF;
+}
+
+bool penumbraLutSampleBehind(vec4 plane, uint table, uint bit) {
+    return penumbraLutSampleBehindBounded(plane, penumbraLutExactBound(plane), table, bit);
 }
 
 // The ground truth: every sample of the table tested against the plane (slow: 128 tests).
 uvec4 penumbraExactBehind(vec4 plane, uint table) {
     const uint count = penumbraLutSampleCount(PENUMBRA_LUT_PARAMS, table);
+    const float bound = penumbraLutExactBound(plane);
     uvec4 m = uvec4(0u);
     for (uint b = 0u; b < count; ++b) {
-        if (penumbraLutSampleBehind(plane, table, b)) m[b >> 5u] |= 1u << (b & 31u);
+        if (penumbraLutSampleBehindBounded(plane, bound, table, b)) m[b >> 5u] |= 1u << (b & 31u);
     }
     return m;
 }
@@ -189,12 +211,13 @@ void penumbraLutCombine(inout uvec4 certain, inout uvec4 uncertain, uvec4 certai
 uvec4 penumbraLutResolve(vec4 plane, uint table, uvec4 certain, uvec4 uncertain) {
     uvec4 m = certain;
     uncertain &= penumbraLutValidMask(PENUMBRA_LUT_PARAMS, table);
+    const float bound = penumbraLutExactBound(plane);
     for (uint w = 0u; w < 4u; ++w) {
         uint bits = uncertain[w];
         while (bits != 0u) {
             const uint b = uint(findLSB(bits));
             bits &= bits - 1u;
-            if (penumbraLutSampleBehind(plane, table, 32u * w + b)) m[w] |= 1u << b;
+            if (penumbraLutSampleBehindBounded(plane, bound, table, 32u * w + b)) m[w] |= 1u << b;
         }
     }
     return m;
