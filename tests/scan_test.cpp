@@ -1170,10 +1170,10 @@ TEST_CASE("workgroup.glsl: a hook that disagrees with local_size_x fails to comp
         });
         INFO(error);
         CHECK(contains(error, "failed to compile"));
-        // The message is the driver's: Mesa "array size must be > 0" at the check's line (it reports
-        // source string 0 for it, so the annotation names the entry); glslang names
-        // penumbraScanGroupSizeMustEqualLocalSize; NVIDIA "size of dimension cannot be less than 1"
-        // annotated with the check's lines of workgroup.glsl (59-60).
+        // The message is the driver's: Mesa "array size must be > 0" at the check's line (annotated
+        // with workgroup.glsl's line even where Mesa reports source string 0: the line numbers
+        // carry the file); glslang names penumbraScanGroupSizeMustEqualLocalSize; NVIDIA "size of
+        // dimension cannot be less than 1" annotated with the check's lines of workgroup.glsl (59-60).
         CHECK((contains(error, "array size") || contains(error, "penumbraScanGroupSizeMustEqualLocalSize") ||
                contains(error, "penumbra/scan/workgroup.glsl:59]") || contains(error, "penumbra/scan/workgroup.glsl:60]")));
     }

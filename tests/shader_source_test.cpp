@@ -233,3 +233,126 @@ TEST_CASE("foldDispatch respects the per-dimension limit") {
     CHECK(foldDispatch(10, 3, 4).x == 3);
     CHECK_THROWS_AS(foldDispatch(13, 3, 4), penumbra::Error);
 }
+
+namespace {
+
+// A snippet with a hook check and one include; an entry with a guarded #error of its own.
+ShaderLibrary snippetLibrary() {
+    ShaderLibrary lib;
+    lib.add("penumbra/s/hooked.glsl", "#ifndef S_HOOKED\n#define S_HOOKED\n#include \"penumbra/s/inc.glsl\"\n"
+                                      "#ifndef S_HOOK\n#error penumbra/s/hooked.glsl needs the hook S_HOOK\n#endif\n"
+                                      "float hooked() { return S_HOOK; }\n#endif\n");
+    lib.add("penumbra/s/inc.glsl", "const float s_inc = 1.0;\n");
+    lib.add("penumbra/s/entry.comp.glsl", "#ifndef S_PASS\n#error entry needs S_PASS\n#endif\n"
+                                          "#include \"penumbra/s/hooked.glsl\"\nvoid main() {}\n");
+    return lib;
+}
+
+// The 1-based line of `text` on which `what` starts (the test's own count, not the assembler's).
+int lineOf(const std::string& text, const std::string& what) {
+    const size_t at = text.find(what);
+    REQUIRE(at != std::string::npos);
+    return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+}
+
+}  // namespace
+
+TEST_CASE("snippet: #line markers name the snippet's own files and resume the engine's numbering") {
+    const ShaderLibrary lib = snippetLibrary();
+    penumbra::SnippetPlacement at;
+    at.engine_file = "engine/e.comp.glsl";
+    at.resume_line = 7;
+    const penumbra::ShaderSnippet s = penumbra::assembleSnippet("penumbra/s/hooked.glsl", at, lib);
+    INFO(s.text);
+    CHECK(s.files == std::vector<std::string>{"engine/e.comp.glsl", "penumbra/s/hooked.glsl", "penumbra/s/inc.glsl"});
+    CHECK(s.text.rfind("#line 100001 1 // penumbra-file: penumbra/s/hooked.glsl\n", 0) == 0);
+    CHECK(s.text.find("#line 200001 2 // penumbra-file: penumbra/s/inc.glsl\nconst float s_inc") != std::string::npos);
+    CHECK(s.text.find("#line 100004 1 // penumbra-file: penumbra/s/hooked.glsl\n#ifndef S_HOOK") != std::string::npos);
+    // The engine's source number 0 appears once: the last line, back at the engine's line 7.
+    CHECK(count(s.text, " 0 //") == 1);
+    const std::string resume = "#line 7 0 // penumbra-resume\n";
+    CHECK(s.text.size() > resume.size());
+    CHECK(s.text.compare(s.text.size() - resume.size(), resume.size(), resume) == 0);
+    penumbra::ShaderAssembly table{s.text, s.files};
+    CHECK(table.locate(2, 1) == "penumbra/s/inc.glsl:1");
+    CHECK(table.locate(0, 7) == "engine/e.comp.glsl:7");
+    CHECK(table.locate(0, 200001) == "penumbra/s/inc.glsl:1");  // a driver that drops the source number
+
+    // Numbers after the engine's own source strings; unused numbers name nothing.
+    at.engine_source = 2;
+    at.first_source = 5;
+    const penumbra::ShaderSnippet moved = penumbra::assembleSnippet("penumbra/s/hooked.glsl", at, lib);
+    CHECK(moved.text.rfind("#line 500001 5 // penumbra-file: penumbra/s/hooked.glsl\n", 0) == 0);
+    REQUIRE(moved.files.size() == 7);
+    CHECK(moved.files[2] == "engine/e.comp.glsl");
+    CHECK(moved.files[6] == "penumbra/s/inc.glsl");
+    CHECK(penumbra::ShaderAssembly{moved.text, moved.files}.locate(3, 1).empty());
+    CHECK(moved.text.find("#line 7 2 // penumbra-resume\n") != std::string::npos);
+
+    // Placements that would mislabel are refused, naming the value.
+    penumbra::SnippetPlacement bad;
+    bad.engine_source = -1;
+    CHECK_THROWS_WITH_AS(penumbra::assembleSnippet("penumbra/s/hooked.glsl", bad, lib), doctest::Contains("is -1"),
+                         penumbra::Error);
+    bad = {};
+    bad.resume_line = -3;
+    CHECK_THROWS_WITH_AS(penumbra::assembleSnippet("penumbra/s/hooked.glsl", bad, lib), doctest::Contains("is -3"),
+                         penumbra::Error);
+    bad = {};
+    bad.engine_source = 4;
+    bad.first_source = 3;
+    CHECK_THROWS_WITH_AS(penumbra::assembleSnippet("penumbra/s/hooked.glsl", bad, lib),
+                         doctest::Contains("first_source is 3"), penumbra::Error);
+}
+
+TEST_CASE("snippet: without a placement it never reuses the engine's source 0 and says where it resumes") {
+    const ShaderLibrary lib = snippetLibrary();
+    const penumbra::ShaderSnippet s = penumbra::assembleSnippet("penumbra/s/hooked.glsl", lib);
+    INFO(s.text);
+    CHECK(s.text.find("#line 1 0") == std::string::npos);
+    CHECK(s.text.find(" 0 //") == std::string::npos);
+    CHECK(s.text.find("#line 300001 3 // penumbra-resume\n") != std::string::npos);
+    REQUIRE(s.files.size() == 4);
+    CHECK(s.files[1] == "penumbra/s/hooked.glsl");
+    CHECK(s.files[3] == "your shader after penumbra/s/hooked.glsl");
+}
+
+TEST_CASE("snippet: pasted into an engine file, the assembler keeps its files and the engine's lines") {
+    ShaderLibrary lib = snippetLibrary();
+    const penumbra::ShaderSnippet s = penumbra::assembleSnippet("penumbra/s/hooked.glsl", lib);
+    const std::string engine = "#version 450\n" + s.extensions + "#define S_HOOK 2.0\n" + s.text +
+                               "layout(local_size_x = 1) in;\nvoid main() { float x = hooked(); }\n";
+    lib.add("engine/e.comp.glsl", engine);
+    const penumbra::ShaderAssembly a = assembleShader("engine/e.comp.glsl", {}, lib);
+    INFO(a.text);
+    CHECK(a.files == std::vector<std::string>{"engine/e.comp.glsl", "penumbra/s/hooked.glsl", "penumbra/s/inc.glsl"});
+    // The snippet's markers renumbered into the assembly's table, the comments gone.
+    CHECK(a.text.find("penumbra-file") == std::string::npos);
+    CHECK(a.text.find("#line 100001 1\n#ifndef S_HOOKED") != std::string::npos);
+    // After the snippet the engine's numbering resumes at the line the engine text has there.
+    const int main_line = lineOf(engine, "void main()");
+    CHECK(a.text.find("#line " + std::to_string(main_line - 1) + " 0\nlayout(local_size_x") != std::string::npos);
+    const std::string log = a.annotateLog("1:5(1): preprocessor error: #error\n0:" + std::to_string(main_line) +
+                                          "(15): error: x\n");
+    CHECK(log.find("[penumbra/s/hooked.glsl:5]") != std::string::npos);
+    CHECK(a.annotateLog("0:100005(1): error: dropped source\n").find("[penumbra/s/hooked.glsl:5]") != std::string::npos);
+    CHECK(log.find("[engine/e.comp.glsl:" + std::to_string(main_line) + "]") != std::string::npos);
+    // A later #include of a file the snippet already holds is skipped like any repeat.
+    lib.add("engine/twice.comp.glsl", engine + "#include \"penumbra/s/inc.glsl\"\n");
+    CHECK(count(assembleShader("engine/twice.comp.glsl", {}, lib).text, "const float s_inc") == 1);
+    lib.add("engine/bad.comp.glsl", "#line 3 1 // penumbra-file: \n");
+    CHECK_THROWS_WITH_AS(assembleShader("engine/bad.comp.glsl", {}, lib), doctest::Contains("engine/bad.comp.glsl:1"),
+                         penumbra::Error);
+}
+
+TEST_CASE("snippet: a missing hook's #error names the hook and the include order") {
+    const ShaderLibrary lib = snippetLibrary();
+    const std::string order = " [penumbra: hook S_HOOK is not defined where the snippet starts. Order: version "
+                              "line, extension lines, your hook defines, then the snippet text or its include line]";
+    const std::string flattened = penumbra::assembleSnippet("penumbra/s/hooked.glsl", lib).text;
+    CHECK(flattened.find("#error penumbra/s/hooked.glsl needs the hook S_HOOK" + order + "\n") != std::string::npos);
+    // Included by an entry: the snippet's hook error gets it, the entry's own define check does not.
+    const std::string entry = assembleShader("penumbra/s/entry.comp.glsl", {{"S_PASS", "1"}}, lib).text;
+    CHECK(entry.find("#error penumbra/s/hooked.glsl needs the hook S_HOOK" + order + "\n") != std::string::npos);
+    CHECK(entry.find("#error entry needs S_PASS\n") != std::string::npos);
+}

@@ -12,8 +12,13 @@
 //   else `#version 450`), then the `#extension` lines the files ask for, then the injected
 //   defines, then the text with every `#include "penumbra/..."` pasted in (each file once per
 //   assembly; files keep include guards anyway) and `#line L F` markers, F being the index of the
-//   file in Assembly::files, so a driver's "F:L" message maps back to key:line (see
+//   file in Assembly::files and L counting from F * kLineStride for F >= 1, so a driver's "F:L"
+//   message maps back to key:line even where the driver drops F (Mesa does, on many errors; see
 //   Assembly::locate and gl/shader.hpp).
+//   assembleSnippet(key, placement) flattens a snippet for your own shader text: its #line
+//   markers use source numbers after yours and end with one that resumes your numbering. Passed
+//   back through a ShaderLibrary (or gl::compileShaderText), its files stay in the error table.
+//   An `#error` right after `#ifndef HOOK` in a snippet gets the include-order rule appended.
 #ifndef PENUMBRA_SHADER_SOURCE_HPP
 #define PENUMBRA_SHADER_SOURCE_HPP
 
@@ -123,9 +128,19 @@ struct ShaderAssembly {
     std::string text;
     std::vector<std::string> files;  ///< index = the source-string number used in #line markers
 
-    /// "key:line" for a driver's (file index, line) pair, or "" when out of range.
+    /// Lines of file F >= 1 are numbered F * kLineStride + line: the line alone names the file.
+    static constexpr int kLineStride = 100000;
+    static constexpr int kMaxFiles = 20000;  ///< source numbers stay below this (line fits an int)
+
+    /// "key:line" for a driver's (file index, line) pair, or "" when out of range or unnamed. A
+    /// line >= kLineStride names its file itself, whatever file index the driver reported.
     std::string locate(int file_index, int line) const {
+        if (line >= kLineStride) {
+            file_index = line / kLineStride;
+            line %= kLineStride;
+        }
         if (file_index < 0 || static_cast<size_t>(file_index) >= files.size()) return {};
+        if (files[static_cast<size_t>(file_index)].empty()) return {};
         return files[static_cast<size_t>(file_index)] + ":" + std::to_string(line);
     }
 
@@ -171,6 +186,18 @@ inline bool isDirective(const std::string& line, const char* name, std::string* 
     return true;
 }
 
+// Marker comments on a flattened snippet's #line lines, so that the assembler can renumber them
+// when the text comes back inside an engine file (GLSL drops comments before directives).
+constexpr const char* kSnippetFileMarker = "// penumbra-file: ";
+constexpr const char* kSnippetResumeMarker = "// penumbra-resume";
+
+// Appended to a snippet's "#ifndef HOOK / #error" (STYLE.md habit 3): the driver's message then
+// says the order too. No quotes or '#': glslang tokenizes #error text.
+inline std::string hookOrderHint(const std::string& hook) {
+    return " [penumbra: hook " + hook + " is not defined where the snippet starts. Order: version line, "
+           "extension lines, your hook defines, then the snippet text or its include line]";
+}
+
 inline bool validDefineName(const std::string& name) {
     if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) return false;
     for (char c : name) {
@@ -184,8 +211,11 @@ public:
     explicit Assembler(const ShaderLibrary& library) : library_(library) {}
 
     /// The pasted text of `key` and its includes, without #version, #extension or defines
-    /// (assembleSnippet); `extensions` receives the #extension lines the files ask for.
-    ShaderAssembly flatten(const std::string& key, std::string& extensions) {
+    /// (assembleSnippet); `extensions` receives the #extension lines the files ask for. Files are
+    /// numbered from `first_source`; every #line carries kSnippetFileMarker and the file's key.
+    ShaderAssembly flatten(const std::string& key, std::string& extensions, int first_source) {
+        snippet_ = true;
+        base_ = first_source;
         std::string body;
         paste(key, body, 0, key);
         PENUMBRA_CHECK(version_.empty(), "penumbra: '", key, "' has #version: it is an entry shader, not a snippet "
@@ -216,6 +246,51 @@ private:
     std::vector<std::string> extensions_;
     std::vector<std::string> files_;
     std::vector<std::string> stack_;
+    bool snippet_ = false;  // flattening for an engine's text (markers on every #line)
+    int base_ = 0;          // source number of files_[0]
+
+    // `#line` for line `line` of files_[index]; its source number is base_ + index.
+    std::string lineMarker(int line, int index) const {
+        const int source = base_ + index;
+        PENUMBRA_CHECK(source < ShaderAssembly::kMaxFiles, "penumbra: shader source number ", source,
+                       " exceeds ", ShaderAssembly::kMaxFiles - 1, " (at '", files_[static_cast<size_t>(index)], "')");
+        PENUMBRA_CHECK(line < ShaderAssembly::kLineStride, "penumbra: '", files_[static_cast<size_t>(index)],
+                       "' has line ", line, "; files may have at most ", ShaderAssembly::kLineStride - 1, " lines");
+        const int numbered = source == 0 ? line : source * ShaderAssembly::kLineStride + line;
+        std::string m = "#line " + std::to_string(numbered) + " " + std::to_string(source);
+        if (snippet_) m += std::string(" ") + kSnippetFileMarker + files_[static_cast<size_t>(index)];
+        return m + "\n";
+    }
+
+    // A flattened snippet's #line inside `key` (an engine file): renumbered into this assembly's
+    // table. Returns false for any other #line, which passes through untouched.
+    bool renumberSnippetLine(const std::string& rest, const std::string& key, int number, int index,
+                             std::string& out) {
+        const size_t file_at = rest.find(kSnippetFileMarker);
+        if (file_at != std::string::npos) {
+            std::string file = rest.substr(file_at + std::char_traits<char>::length(kSnippetFileMarker));
+            while (!file.empty() && std::isspace(static_cast<unsigned char>(file.back()))) file.pop_back();
+            char* end = nullptr;
+            const long line = std::strtol(rest.c_str(), &end, 10);
+            PENUMBRA_CHECK(!file.empty() && end != rest.c_str() && line >= 0 && line < 0x7fffffff,
+                           "penumbra: malformed snippet #line marker at ", key, ":", number, ": '", rest, "'");
+            int file_index = -1;
+            for (size_t i = 0; i < files_.size(); ++i) {
+                if (files_[i] == file) file_index = static_cast<int>(i);
+            }
+            if (file_index < 0) {  // now pasted: a later #include of it is skipped like a repeat
+                file_index = static_cast<int>(files_.size());
+                files_.push_back(file);
+            }
+            out += lineMarker(static_cast<int>(line % ShaderAssembly::kLineStride), file_index);
+            return true;
+        }
+        if (rest.find(kSnippetResumeMarker) != std::string::npos) {
+            out += lineMarker(number + 1, index);  // back to `key`'s own lines
+            return true;
+        }
+        return false;
+    }
 
     void paste(const std::string& key, std::string& out, int depth, const std::string& from) {
         PENUMBRA_CHECK(depth < 32, "penumbra: shader includes nest deeper than 32 levels at '", key, "'");
@@ -231,13 +306,22 @@ private:
         files_.push_back(key);
         stack_.push_back(key);
         std::istringstream in(library_.source(key));
-        std::string line, rest;
+        std::string line, rest, ifndef_name;
         int number = 0;
-        out += "#line 1 " + std::to_string(index) + "\n";
+        out += lineMarker(1, index);
         while (std::getline(in, line)) {
             ++number;
             if (!line.empty() && line.back() == '\r') line.pop_back();
-            if (isDirective(line, "version", &rest)) {
+            std::string guarded;  // the macro of an #ifndef on the line before
+            std::swap(guarded, ifndef_name);
+            if (isDirective(line, "ifndef", &rest)) {
+                ifndef_name = rest.substr(0, rest.find_first_of(" \t"));
+                out += line + '\n';
+            } else if (isDirective(line, "error", &rest) && !guarded.empty() && (snippet_ || depth > 0)) {
+                out += line + hookOrderHint(guarded) + '\n';
+            } else if (isDirective(line, "line", &rest) && renumberSnippetLine(rest, key, number, index, out)) {
+                // a pasted snippet's marker, renumbered
+            } else if (isDirective(line, "version", &rest)) {
                 PENUMBRA_CHECK(depth == 0, "penumbra: '", key, ":", number,
                                "' has #version; only entry shaders may (snippets get it from the assembler)");
                 version_ = "#version " + rest;
@@ -256,7 +340,7 @@ private:
                 }
                 PENUMBRA_CHECK(!target.empty(), "penumbra: malformed #include at ", key, ":", number);
                 paste(target, out, depth + 1, key + ":" + std::to_string(number));
-                out += "#line " + std::to_string(number + 1) + " " + std::to_string(index) + "\n";
+                out += lineMarker(number + 1, index);
             } else {
                 out += line;
                 out += '\n';
@@ -268,23 +352,61 @@ private:
 
 }  // namespace detail
 
-/// A snippet flattened for pasting into your own shader text (ShaderSnippet::text has every
-/// `#include "penumbra/..."` pasted, each file once, with `#line L F` markers; no #version and no
-/// defines). Put `extensions` right after your own #version line, then your hook #defines, then
-/// `text`. Throws penumbra::Error when `key` is an entry shader (it has #version) or on the
-/// errors of assembleShader.
-struct ShaderSnippet {
-    std::string extensions;          ///< the #extension lines the files ask for, one per line
-    std::string text;                ///< the pasted snippet
-    std::vector<std::string> files;  ///< source-string numbers of the #line markers
+/// Where a flattened snippet goes in your shader text, so that driver messages map back to files.
+struct SnippetPlacement {
+    std::string engine_file = "your shader";  ///< your text's name in ShaderSnippet::files
+    int engine_source = 0;  ///< your text's GLSL source-string number (#line's second argument), >= 0
+    int resume_line = 0;    ///< your line number of the line after the snippet, 1 to 99 999; 0: unknown
+    int first_source = 0;   ///< the snippet's first source number, > engine_source; 0: engine_source + 1
 };
 
-inline ShaderSnippet assembleSnippet(const std::string& key, const ShaderLibrary& library = ShaderLibrary::embedded()) {
+/// A snippet flattened for pasting into your own shader text (ShaderSnippet::text has every
+/// `#include "penumbra/..."` pasted, each file once, with `#line F*kLineStride+L F` markers; no #version and no
+/// defines). Order: your #version, `extensions`, your hook #defines (and, for compute snippets
+/// that read gl_WorkGroupSize, your layout(local_size_...) in; line), then `text`, at global scope.
+/// `text` ends with `#line resume_line engine_source`; with resume_line 0 it resumes at line 1 of
+/// a source named "<engine_file> after <key>" instead. Given back inside a ShaderLibrary file, the
+/// assembler renumbers the markers into its own table. Throws penumbra::Error when `key` is an
+/// entry shader (it has #version), on a bad placement, or on the errors of assembleShader.
+struct ShaderSnippet {
+    std::string extensions;          ///< the #extension lines the files ask for, one per line
+    std::string text;                ///< the pasted snippet, ending with the #line that resumes yours
+    std::vector<std::string> files;  ///< index = source-string number: yours, the snippet's; "" unused
+};
+
+inline ShaderSnippet assembleSnippet(const std::string& key, const SnippetPlacement& placement,
+                                     const ShaderLibrary& library = ShaderLibrary::embedded()) {
+    PENUMBRA_CHECK(placement.engine_source >= 0, "penumbra: SnippetPlacement::engine_source is ",
+                   placement.engine_source, " (a GLSL source-string number is >= 0)");
+    PENUMBRA_CHECK(placement.resume_line >= 0 && placement.resume_line < ShaderAssembly::kLineStride,
+                   "penumbra: SnippetPlacement::resume_line is ", placement.resume_line, " (1 to ",
+                   ShaderAssembly::kLineStride - 1, ", or 0 when unknown)");
+    const int first = placement.first_source == 0 ? placement.engine_source + 1 : placement.first_source;
+    PENUMBRA_CHECK(first > placement.engine_source && first < ShaderAssembly::kMaxFiles,
+                   "penumbra: SnippetPlacement::first_source is ", placement.first_source, " (must exceed engine_source ",
+                   placement.engine_source, ", so the snippet's numbers never name your text, and stay below ",
+                   ShaderAssembly::kMaxFiles, ")");
     ShaderSnippet out;
-    ShaderAssembly a = detail::Assembler(library).flatten(key, out.extensions);
+    ShaderAssembly a = detail::Assembler(library).flatten(key, out.extensions, first);
     out.text = std::move(a.text);
-    out.files = std::move(a.files);
+    out.files.assign(static_cast<size_t>(first), std::string());
+    out.files[static_cast<size_t>(placement.engine_source)] = placement.engine_file;
+    out.files.insert(out.files.end(), a.files.begin(), a.files.end());
+    if (placement.resume_line > 0) {
+        out.text += "#line " + std::to_string(placement.resume_line) + " " + std::to_string(placement.engine_source);
+    } else {  // unknown: count your lines from the snippet's end, under a name that says so
+        const int after = static_cast<int>(out.files.size());
+        PENUMBRA_CHECK(after < ShaderAssembly::kMaxFiles, "penumbra: snippet '", key, "' needs source number ", after,
+                       ", above ", ShaderAssembly::kMaxFiles - 1);
+        out.text += "#line " + std::to_string(after * ShaderAssembly::kLineStride + 1) + " " + std::to_string(after);
+        out.files.push_back(placement.engine_file + " after " + key);
+    }
+    out.text += std::string(" ") + detail::kSnippetResumeMarker + "\n";
     return out;
+}
+
+inline ShaderSnippet assembleSnippet(const std::string& key, const ShaderLibrary& library = ShaderLibrary::embedded()) {
+    return assembleSnippet(key, SnippetPlacement{}, library);
 }
 
 /// Assembles `key` from `library` (see the summary at the top of this file). Throws

@@ -6,7 +6,8 @@
 //             assembled by penumbra/shader_source.hpp (embedded table or a directory).
 //   errors:   a compile or link failure throws penumbra::Error whose message holds the stage, the
 //             entry key, the driver's info log with "[key:line]" appended to every location that
-//             maps to a snippet, and the define set.
+//             maps to a snippet, and the define set. compileShaderText does the same for text
+//             you put together yourself (a flattened snippet pasted in), with your file table.
 #ifndef PENUMBRA_GL_SHADER_HPP
 #define PENUMBRA_GL_SHADER_HPP
 
@@ -91,13 +92,12 @@ inline std::string definesText(const ShaderDefines& defines) {
 
 }  // namespace detail
 
-/// Compiles one stage; returns the shader object (caller deletes) or throws penumbra::Error.
-inline GLuint compileShader(GLenum stage, const std::string& key, const ShaderDefines& defines = {},
-                            const ShaderLibrary& library = ShaderLibrary::embedded()) {
-    PENUMBRA_CHECK(stage != 0, "penumbra: '", key, "' is not an entry shader (*.comp/vert/geom/frag.glsl)");
-    ShaderAssembly assembly = assembleShader(key, defines, library);
+namespace detail {
+
+inline GLuint compileAssembly(GLenum stage, const std::string& name, const ShaderAssembly& assembly,
+                              const std::string& defines_text) {
     GLuint shader = glCreateShader(stage);
-    PENUMBRA_CHECK(shader != 0, "penumbra: glCreateShader(", stageName(stage), ") failed for ", key);
+    PENUMBRA_CHECK(shader != 0, "penumbra: glCreateShader(", stageName(stage), ") failed for ", name);
     const char* text = assembly.text.c_str();
     glShaderSource(shader, 1, &text, nullptr);
     glCompileShader(shader);
@@ -110,10 +110,27 @@ inline GLuint compileShader(GLenum stage, const std::string& key, const ShaderDe
         glGetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
         glDeleteShader(shader);
         log.resize(std::char_traits<char>::length(log.c_str()));
-        ::penumbra::detail::fail("penumbra: ", stageName(stage), " shader '", key, "' failed to compile (defines: ",
-             detail::definesText(defines), "):\n", assembly.annotateLog(log));
+        ::penumbra::detail::fail("penumbra: ", stageName(stage), " shader '", name, "' failed to compile (defines: ",
+                                 defines_text, "):\n", assembly.annotateLog(log));
     }
     return shader;
+}
+
+}  // namespace detail
+
+/// Compiles one stage; returns the shader object (caller deletes) or throws penumbra::Error.
+inline GLuint compileShader(GLenum stage, const std::string& key, const ShaderDefines& defines = {},
+                            const ShaderLibrary& library = ShaderLibrary::embedded()) {
+    PENUMBRA_CHECK(stage != 0, "penumbra: '", key, "' is not an entry shader (*.comp/vert/geom/frag.glsl)");
+    return detail::compileAssembly(stage, key, assembleShader(key, defines, library), detail::definesText(defines));
+}
+
+/// Compiles your own text as is (source.text, #version and all); the error log's source numbers
+/// are translated through source.files (e.g. ShaderSnippet::files of the snippet you pasted in).
+/// Returns the shader object (caller deletes) or throws penumbra::Error naming `name`.
+inline GLuint compileShaderText(GLenum stage, const std::string& name, const ShaderAssembly& source) {
+    PENUMBRA_CHECK(stage != 0, "penumbra: compileShaderText('", name, "') needs a GL stage, got 0");
+    return detail::compileAssembly(stage, name, source, "(your text)");
 }
 
 /// Compiles and links the given entry keys (stages inferred from the file names).
