@@ -699,7 +699,7 @@ TEST_CASE("obj: failures name the path and the reason") {
     const std::string infinite = dir.write("infinite.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n");
     message = errorMessage([&] { loadObj(infinite); });
     CHECK(contains(message, infinite));
-    CHECK(contains(message, "vertex 2 has a NaN or infinite coordinate"));
+    CHECK(contains(message, "vertex 2: '1e39' is beyond float range"));  // not "NaN or infinite": it is neither
     CHECK(contains(message, "line 2"));
     CHECK(contains(message, "'1e39'"));
 
@@ -743,6 +743,8 @@ TEST_CASE("obj: the validating pass names the line and the value") {
         {tri + "f 1/0 2 3\n", {"line 4", "texture coordinate index 0"}},
         {tri + "f 1/1/1/1 2 3\n", {"line 4", "more than 3 indices"}},
         {"v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\nv 1 1 nan\r\n", {"line 5", "'nan'"}},  // CRLF counts once
+        {"v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n", {"every one of the 1 triangles has zero area"}},  // collinear: nothing to render
+        {"v 0 0 0\nv 1 1 1\nv 2 2 2\nv 3 3 3\nf 1 2 3\nf 2 3 4\n", {"every one of the 2 triangles has zero area"}},
     };
     for (const auto& [text, parts] : cases) {
         INFO(text);

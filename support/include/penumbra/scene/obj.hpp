@@ -352,8 +352,8 @@ inline std::string validateObjText(const std::string& text, const std::string& w
                     failAt(kKinds[kind], " ", number, ": ", quoteObjToken(tokens[t]), " is not a number");
                 }
                 if (out_of_range || std::abs(value) > double(FLT_MAX))
-                    failAt(kKinds[kind], " ", number, " has a NaN or infinite coordinate: ", quoteObjToken(tokens[t]),
-                           " is beyond float range");
+                    failAt(kKinds[kind], " ", number, ": ", quoteObjToken(tokens[t]),
+                           " is beyond float range (|value| <= 3.4e38)");
                 if (t <= 3) position[t - 1] = value;
                 char printed[32];
                 const std::to_chars_result written = std::to_chars(printed, printed + sizeof printed, value);
@@ -585,6 +585,18 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
     mesh.indices.reserve(triangles.size() * 3);
     for (const auto& triangle : triangles)
         for (uint32_t v : triangle) mesh.indices.push_back(remap[v]);
+    // A file whose every triangle has no area (collinear corners) casts nothing and shows nothing:
+    // refused rather than rendered as an empty scene.
+    {
+        size_t flat = 0;
+        for (const auto& triangle : triangles) {
+            const glm::dvec3 a = file_positions[triangle[0]], b = file_positions[triangle[1]], c = file_positions[triangle[2]];
+            const glm::dvec3 n = glm::cross(b - a, c - a);
+            flat += n.x == 0.0 && n.y == 0.0 && n.z == 0.0;
+        }
+        PENUMBRA_CHECK(flat < triangles.size(), where, "every one of the ", triangles.size(),
+                       " triangles has zero area (collinear corners): nothing to render");
+    }
 
     // File normals are usable only as one normal per position: per-corner normals (hard edges)
     // would need split vertices, which would break index-based adjacency.
