@@ -41,6 +41,7 @@
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/scan.hpp"
 #include "penumbra/gl/shader.hpp"
+#include "penumbra/gl/validate.hpp"
 
 #include <array>
 #include <string>
@@ -284,14 +285,14 @@ public:
         DsmParams p = staging_[0];
         p.capacity.x = count;
         glNamedBufferSubData(params_.id(), setup_.levels * ubo_stride_, sizeof(DsmParams), &p);
-        glBindBufferRange(GL_UNIFORM_BUFFER, PENUMBRA_DSM_BINDING_PARAMS, params_.id(),
-                          static_cast<GLintptr>(setup_.levels * ubo_stride_), sizeof(DsmParams));
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, queries.buffer, static_cast<GLintptr>(queries.offset),
-                          static_cast<GLsizeiptr>(queries.size));
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, results.buffer, static_cast<GLintptr>(results.offset),
-                          static_cast<GLsizeiptr>(results.size));
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_OFFSETS, offsets_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_VERTICES, vertices_.id());
+        gl::bindRange(GL_UNIFORM_BUFFER, PENUMBRA_DSM_BINDING_PARAMS, params_.id(),
+                      static_cast<GLintptr>(setup_.levels * ubo_stride_), sizeof(DsmParams));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, 0, queries.buffer, static_cast<GLintptr>(queries.offset),
+                      static_cast<GLsizeiptr>(queries.size));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, 2, results.buffer, static_cast<GLintptr>(results.offset),
+                      static_cast<GLsizeiptr>(results.size));
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_OFFSETS, offsets_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_VERTICES, vertices_.id());
         dispatch(lookup_, count);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     }
@@ -371,26 +372,26 @@ public:
 
 private:
     void bindLevel(uint32_t level) {
-        glBindBufferRange(GL_UNIFORM_BUFFER, PENUMBRA_DSM_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(level * ubo_stride_),
-                          sizeof(DsmParams));
+        gl::bindRange(GL_UNIFORM_BUFFER, PENUMBRA_DSM_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(level * ubo_stride_),
+                      sizeof(DsmParams));
     }
     void bindAll(const DsmCasterBuffers& casters, uint32_t level) {
         bindLevel(level);
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
         if (!casters.triangle_opacity.empty()) {
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_TRIANGLE_OPACITY, casters.triangle_opacity.buffer,
-                              static_cast<GLintptr>(casters.triangle_opacity.offset),
-                              static_cast<GLsizeiptr>(casters.triangle_opacity.size));
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_TRIANGLE_OPACITY, casters.triangle_opacity.buffer,
+                          static_cast<GLintptr>(casters.triangle_opacity.offset),
+                          static_cast<GLsizeiptr>(casters.triangle_opacity.size));
         } else {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_TRIANGLE_OPACITY, dummy_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_TRIANGLE_OPACITY, dummy_.id());
         }
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_PATTERNS, patterns_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_COUNTS, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_CURSOR, cursor_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_RECORDS, records_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_STATUS, status_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_OFFSETS, offsets_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_VERTICES, vertices_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_PATTERNS, patterns_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_COUNTS, counts_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_CURSOR, cursor_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_RECORDS, records_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_STATUS, status_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_OFFSETS, offsets_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_DSM_BINDING_MAP_VERTICES, vertices_.id());
     }
     void dispatch(const Program& program, uint64_t invocations) {
         if (invocations == 0) return;

@@ -64,6 +64,24 @@ inline GLint getInteger(GLenum name, GLuint index) {
     return value;
 }
 
+/// glDeleteBuffers that leaves the engine's generic GL_SHADER_STORAGE_BUFFER, GL_UNIFORM_BUFFER and
+/// GL_ATOMIC_COUNTER_BUFFER bindings as GL 4.5 §5.1.2 says: reset only where they named a deleted
+/// buffer. Mesa unbinds a deleted buffer's indexed points through the calls that also set the
+/// generic binding, zeroing it. Queries GL (three glGetIntegerv): setup and destructors only.
+inline void deleteBuffers(GLsizei count, const GLuint* buffers) {
+    static constexpr GLenum kTargets[3][2] = {{GL_SHADER_STORAGE_BUFFER, GL_SHADER_STORAGE_BUFFER_BINDING},
+                                              {GL_UNIFORM_BUFFER, GL_UNIFORM_BUFFER_BINDING},
+                                              {GL_ATOMIC_COUNTER_BUFFER, GL_ATOMIC_COUNTER_BUFFER_BINDING}};
+    GLint generic[3];
+    for (int t = 0; t < 3; ++t) generic[t] = getInteger(kTargets[t][1]);
+    glDeleteBuffers(count, buffers);
+    for (int t = 0; t < 3; ++t) {
+        bool deleted = generic[t] == 0;
+        for (GLsizei i = 0; i < count && !deleted; ++i) deleted = static_cast<GLint>(buffers[i]) == generic[t];
+        if (!deleted) glBindBuffer(kTargets[t][0], static_cast<GLuint>(generic[t]));
+    }
+}
+
 /// The rasterizer state every penumbra draw pass relies on, set before it draws into its own
 /// framebuffer whatever the engine left behind (a UI pass's scissor box, a wireframe debug
 /// toggle, user clip planes, D3D-style clip control, primitive restart, a narrowed depth range):

@@ -140,7 +140,7 @@ public:
         if (data) glNamedBufferSubData(id_, 0, static_cast<GLsizeiptr>(bytes), data);
     }
     void reset() {
-        if (id_) glDeleteBuffers(1, &id_);
+        if (id_) gl::deleteBuffers(1, &id_);  // bound at indexed points: keeps the generic ones
         id_ = 0;
         bytes_ = 0;
     }

@@ -41,6 +41,7 @@
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/scan.hpp"
 #include "penumbra/gl/shader.hpp"
+#include "penumbra/gl/validate.hpp"
 #include "penumbra/airlight.hpp"
 #include "penumbra/light_volume.hpp"
 
@@ -195,16 +196,16 @@ public:
 
 private:
     void bindLevel(uint32_t k) {
-        glBindBufferRange(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(k) * ubo_stride_,
-                          sizeof(LightVolumeParams));
+        gl::bindRange(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_PARAMS, params_.id(), static_cast<GLintptr>(k) * ubo_stride_,
+                      sizeof(LightVolumeParams));
     }
     void bindAll(uint32_t k) {
         bindLevel(k);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_FLAGS, flags_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_COUNTS, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_INDIRECT, indirect_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_FLAGS, flags_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_COUNTS, counts_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_INDIRECT, indirect_.id());
     }
     void dispatch(const Program& program, uint64_t invocations) {
         if (invocations == 0) return;
@@ -326,12 +327,12 @@ public:
         glEnablei(GL_BLEND, 0);
         glBlendEquationi(0, GL_FUNC_ADD);
         glBlendFunci(0, GL_ONE, GL_ONE);
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
         const BufferRange corners = tessellator.corners(), triangles = tessellator.triangles(), indirect = tessellator.indirect();
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners.buffer, GLintptr(corners.offset),
-                          GLsizeiptr(corners.size));
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles.buffer, GLintptr(triangles.offset),
-                          GLsizeiptr(triangles.size));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_CORNERS, corners.buffer, GLintptr(corners.offset),
+                      GLsizeiptr(corners.size));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, PENUMBRA_LV_BINDING_TRIANGLES, triangles.buffer, GLintptr(triangles.offset),
+                      GLsizeiptr(triangles.size));
         glBindTextureUnit(PENUMBRA_LV_AIRLIGHT_UNIT, table_.id());
         glBindSampler(PENUMBRA_LV_AIRLIGHT_UNIT, samplers_[0]);
         glBindTextureUnit(PENUMBRA_LV_SCENE_DEPTH_UNIT, scene_depth_texture);
@@ -357,7 +358,7 @@ public:
     void rayMarch(GLuint shadow_map, uint32_t resolution, uint32_t steps, const LightVolumeView& view, GLuint scene_depth_texture,
                   GLuint lit_texture) {
         upload(view, resolution, steps);
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_LV_BINDING_RENDER_PARAMS, params_.id());
         glBindTextureUnit(PENUMBRA_LV_AIRLIGHT_UNIT, table_.id());
         glBindSampler(PENUMBRA_LV_AIRLIGHT_UNIT, samplers_[0]);
         glBindTextureUnit(PENUMBRA_LV_SCENE_DEPTH_UNIT, scene_depth_texture);

@@ -81,7 +81,7 @@ public:
         if (id_) glClearNamedBufferData(id_, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &pattern);
     }
     void reset() {
-        if (id_) glDeleteBuffers(1, &id_);
+        if (id_) deleteBuffers(1, &id_);  // keeps the engine's generic bindings (gl.hpp)
         id_ = 0;
         size_ = 0;
     }

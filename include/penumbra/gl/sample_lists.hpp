@@ -347,7 +347,7 @@ private:
 
     void upload(const SampleListsParams& params) {
         glNamedBufferSubData(params_.id(), 0, sizeof params, &params);
-        glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.params, params_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, bindings_.params, params_.id());
     }
 
     void runStatistics(const SampleListsSetup& setup, const SampleListsBuffers& lists) {

@@ -148,7 +148,7 @@ public:
         bytes_ = bytes;
     }
     void reset() {
-        if (id_) glDeleteBuffers(1, &id_);
+        if (id_) gl::deleteBuffers(1, &id_);  // bound at indexed points: keeps the generic ones
         id_ = 0;
         bytes_ = 0;
     }
@@ -473,7 +473,7 @@ private:
                                     got.data());
             ok = ok && got == want;
         }
-        glDeleteBuffers(2, buffers);
+        gl::deleteBuffers(2, buffers);  // bound at ScanBindings' points: keeps the generic ones
         reserved_ = 0;
         return ok;
     }

@@ -41,6 +41,7 @@
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/scan.hpp"
 #include "penumbra/gl/shader.hpp"
+#include "penumbra/gl/validate.hpp"
 #include "penumbra/shadow_edge_stencil.hpp"
 
 #include <algorithm>
@@ -251,7 +252,7 @@ public:
         bindRange(PENUMBRA_AA_BINDING_NORMALS, normals_);
         bindRange(PENUMBRA_AA_BINDING_OUT_POSITIONS, positions);
         bindRange(PENUMBRA_AA_BINDING_OUT_NORMALS, normals);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
         dispatch(buffer_program_, pixels_);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         return Status::Ok;
@@ -273,8 +274,8 @@ public:
         }
         setMode(mode, budget);
         bindCommon();
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
         bindRange(PENUMBRA_AA_BINDING_STATES, states);
         bindRange(PENUMBRA_AA_BINDING_VISIBLE, visible);
         dispatch(resolve_program_, pixels_);
@@ -301,7 +302,7 @@ public:
 private:
     void drawCasters(const Program& program, const AaCasterBuffers& casters) {
         if (casters.index_count == 0) return;
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_ubo_.id());
         glVertexArrayVertexBuffer(vao_, 0, casters.positions.buffer, static_cast<GLintptr>(casters.positions.offset),
                                   static_cast<GLsizei>(casters.stride));
         glVertexArrayElementBuffer(vao_, casters.indices.buffer);
@@ -324,10 +325,10 @@ private:
         const uint32_t empty_depth = params_staging_.moments.z ? 0x80000000u : 0xC0000000u, no_cover = 0xFF800000u;
         glClearNamedBufferData(min_depth_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_depth);
         glClearNamedBufferData(min_cover_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &no_cover);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_DEPTH, min_depth_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_COVER, min_cover_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MOMENTS, moments_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COVERS, covers_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_DEPTH, min_depth_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MIN_COVER, min_cover_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_MOMENTS, moments_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COVERS, covers_.id());
         drawCasters(moments_raster_, casters);
         dispatch(moments_level_[0], uint64_t(options_.grid_width) * options_.grid_height);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -351,28 +352,28 @@ private:
     // The edge layout's ranks: 1 per flagged pixel (and 0 at entry P), exclusive-scanned in place.
     void rankFlaggedPixels() {
         bindCommon();
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_RANKS, ranks_.id());
         dispatch(ranks_program_, uint64_t(pixels_) + 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         scanner_.scan(ScanKind::Exclusive, {ranks_.id(), 0, ranks_.size()}, {ranks_.id(), 0, ranks_.size()}, uint64_t(pixels_) + 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_UNIFORM_BARRIER_BIT);
     }
     static void bindRange(GLuint binding, const BufferRange& r) {
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, binding, r.buffer, static_cast<GLintptr>(r.offset), static_cast<GLsizeiptr>(r.size));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, binding, r.buffer, static_cast<GLintptr>(r.offset), static_cast<GLsizeiptr>(r.size));
     }
     void bindCommon() {
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_AA_BINDING_PARAMS, params_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_AA_BINDING_PARAMS, params_.id());
         if (centres_.buffer) bindRange(PENUMBRA_AA_BINDING_CENTRES, centres_);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_SUB_SAMPLES, sub_samples_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STENCIL, stencil_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_SUB_SAMPLES, sub_samples_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STENCIL, stencil_.id());
     }
     void bindStencilPass() {
         bindCommon();
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_FOOTPRINTS, footprints_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COUNTS, counts_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_CURSOR, cursor_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_LIST, list_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_STATUS, status_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_FOOTPRINTS, footprints_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_COUNTS, counts_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_CURSOR, cursor_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, PENUMBRA_AA_BINDING_LIST, list_.id());
     }
     void dispatch(const Program& program, uint64_t invocations) {
         if (invocations == 0) return;

@@ -41,13 +41,23 @@ inline BufferRange wholeBuffer(GLuint buffer) {
     return {buffer, 0, static_cast<uint64_t>(size > 0 ? size : 0)};
 }
 
+// Indexed bindings go through the multi-bind calls (GL 4.4): glBindBufferBase / glBindBufferRange
+// would also change the target's generic binding, which no header lists (README's contract).
+
+/// Binds [offset, +size) of `buffer` at indexed `target` binding `index`; no query.
+inline void bindRange(GLenum target, GLuint index, GLuint buffer, GLintptr offset, GLsizeiptr size) {
+    glBindBuffersRange(target, index, 1, &buffer, &offset, &size);
+}
+
 /// Binds `range` at indexed `target` binding `index` (GL_SHADER_STORAGE_BUFFER,
 /// GL_UNIFORM_BUFFER, ...). No query; an empty range binds nothing.
 inline void bindRange(GLenum target, GLuint index, const BufferRange& range) {
     if (range.size == 0) return;
-    glBindBufferRange(target, index, range.buffer, static_cast<GLintptr>(range.offset),
-                      static_cast<GLsizeiptr>(range.size));
+    bindRange(target, index, range.buffer, static_cast<GLintptr>(range.offset), static_cast<GLsizeiptr>(range.size));
 }
+
+/// Binds the whole of `buffer` at indexed `target` binding `index`; no query.
+inline void bindBase(GLenum target, GLuint index, GLuint buffer) { glBindBuffersBase(target, index, 1, &buffer); }
 
 /// One shader-storage block of an executor's program and the binding its Bindings struct gives it.
 struct BlockBinding {

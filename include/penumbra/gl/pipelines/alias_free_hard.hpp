@@ -369,8 +369,8 @@ private:
     }
 
     void bindParams(uint32_t slot) const {
-        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.params, afh_params_.id(),
-                          static_cast<GLintptr>(size_t(slot) * param_stride_), sizeof(AfhParams));
+        gl::bindRange(GL_UNIFORM_BUFFER, bindings_.params, afh_params_.id(),
+                      static_cast<GLintptr>(size_t(slot) * param_stride_), sizeof(AfhParams));
     }
 
     void lightPassAndResolve(const SampleListsLight& light, const DrawCasters& draw_casters, const BufferRange& states) {
@@ -393,13 +393,13 @@ private:
         blocks_.use();
         glBindVertexArray(empty_vao_.id());
         bindParams(0);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
         gl::drawListBlockPredicates(block_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
         // (3b) skip_empty_texels: the stencil counts each texel's non-empty list blocks.
         const bool stencil = options_.skip_empty_texels;
         if (stencil) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
             gl::drawOccupancyStencil(framebuffer_.id(), occupancy_.id(), empty_vao_.id(), block_queries_, options_.max_list_blocks,
                                      [&](uint32_t b) { bindParams(1 + 2 * b + 1); });
         }
@@ -407,13 +407,13 @@ private:
         // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
         // fragment tests).
         light_pass_.use();
-        glBindBufferBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
-        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.frustum, lists_.frustum.id(), 0, sizeof(SampleListsFrustum));
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
+        gl::bindRange(GL_UNIFORM_BUFFER, bindings_.frustum, lists_.frustum.id(), 0, sizeof(SampleListsFrustum));
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         static constexpr shared::PenumbraAfhSpillWorldHeader kSpillWorldReset{};
         const BufferRange spill = spillRange();
         for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
@@ -423,7 +423,7 @@ private:
                 // Buffer updates run whether or not the block is drawn; they only reset.
                 gl::beginConservativeSpill(conservative_, spill, spill_bindings_);  // validated at construction
                 glNamedBufferSubData(spill_world_.id(), 0, sizeof kSpillWorldReset, &kSpillWorldReset);
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
             }
             for (uint32_t c = 0; c < 2; ++c) {
                 bindParams(1 + 2 * b + c);
@@ -436,7 +436,7 @@ private:
                 spill_pass_.use();
                 bindParams(1 + 2 * b + 1);
                 glBindVertexArray(empty_vao_.id());
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.spill_world, spill_world_.id());
                 gl::drawConservativeSpill(conservative_, spill, spill_bindings_);
             }
             glEndConditionalRender();
@@ -457,13 +457,13 @@ private:
         // (5) Resolve.
         resolve_.use();
         bindParams(0);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (states.empty()) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.states, states_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.states, states_.id());
         } else {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.states, states);
         }

@@ -626,7 +626,7 @@ private:
     }
 
     void bindParams(uint32_t slot) const {
-        glBindBufferRange(GL_UNIFORM_BUFFER, bindings_.params, params_.id(), static_cast<GLintptr>(size_t(slot) * param_stride_),
+        gl::bindRange(GL_UNIFORM_BUFFER, bindings_.params, params_.id(), static_cast<GLintptr>(size_t(slot) * param_stride_),
                           sizeof(SbsParams));
     }
 
@@ -679,7 +679,7 @@ private:
         glDisable(GL_STENCIL_TEST);
         fallback_blocks_.use();
         glBindVertexArray(empty_vao_.id());
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
         gl::drawListBlockPredicates(fallback_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
         bindLightPass(masks, lut_table, frame);
         pass(light_fragment_, fallback_queries_);
@@ -688,32 +688,32 @@ private:
 
     /// The light pass's storage buffers (and the compute pass's: the same bindings).
     void bindLightPass(const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) const {
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, lists_.ids.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.ids, lists_.ids.id());
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (lut_table.empty()) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.lut, dummy_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.lut, dummy_.id());
         } else {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.lut, lut_table);
         }
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
-        if (options_.skips.silhouettes) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
-        if (options_.skips.closed_casters) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.near_samples, near_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.samples, samples_.id());
+        if (options_.skips.silhouettes) gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+        if (options_.skips.closed_casters) gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.near_samples, near_.id());
         if (options_.deferred_pairs > 0) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.deferral, deferral_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.pairs, pairs_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.tests, tests_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_pairs, table_pairs_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.fragments, fragments_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.deferral, deferral_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.pairs, pairs_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.tests, tests_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.table_pairs, table_pairs_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.fragments, fragments_.id());
         }
         if (!frame.sets.empty()) {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.sets, frame.sets);
         } else {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.sets, dummy_.id());
         }
     }
 
@@ -763,7 +763,7 @@ private:
         blocks_.use();
         glBindVertexArray(empty_vao_.id());
         bindParams(0);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
         gl::drawListBlockPredicates(block_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
         // (2b) SoftSkips::silhouettes: mark the texels of every potential silhouette's region.
         if (options_.skips.silhouettes) {
@@ -772,8 +772,8 @@ private:
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             silhouettes_.use();
             bindParams(0);
-            glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+            gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
             (*draw_adjacency_)();
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
@@ -781,8 +781,8 @@ private:
         const bool stencil = options_.skips.empty_blocks;
         const uint32_t stencil_blocks = std::min(options_.max_list_blocks, gl::kOccupancyStencilBlocks);
         if (stencil) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
             gl::drawOccupancyStencil(framebuffer_.id(), occupancy_.id(), empty_vao_.id(), block_queries_, options_.max_list_blocks,
                                      [&](uint32_t b) { bindParams(1 + kSlotsPerBlock * b + 1); });
         }
@@ -790,7 +790,7 @@ private:
         // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
         // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
         const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
-        glBindBufferBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+        gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
         bindLightPass(masks, lut_table, frame);
         if (coverage_bits_.id() != 0) {
             // coverage_texels: the occupancy bits the coverage pass reads (the lists are done).
@@ -880,13 +880,13 @@ private:
         if (!timers_.empty()) timers_[2].begin();
         resolve_.use();
         bindParams(0);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.resolve_offsets, lists_.offsets.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.texels, lists_.texels.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.resolve_offsets, lists_.offsets.id());
         gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.masks, masks);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
         if (frame.visibility.empty()) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, bindings_.visibility, visibility_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.visibility, visibility_.id());
         } else {
             gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.visibility, frame.visibility);
         }
