@@ -66,8 +66,8 @@
 // sizes need against the machine's (checkMemory). After loading the scene and before allocating
 // anything large: the light against the scene's bounds (checkLight; --mode dsm: against the
 // casters' bounding sphere, fitDsmLight) and the memory estimate again, with the scene's
-// triangles. Long phases print their
-// progress on stderr (Progress). Exit codes: 0 done (and --help), 1 failed while running,
+// triangles. Long phases print their progress on stderr (Progress). Exit codes: 0 done (and
+// --help), 1 failed while running or a requested check found a difference (checksVerdict),
 // 2 bad arguments or a run that cannot work.
 //
 // Adding a flag: a field in Args, one add_option line in addOptions(), its row in kModeFlags
@@ -399,13 +399,44 @@ void addOptions(CLI::App& app, Args& a, RawArgs& raw) {
     app.add_flag("--no-ground", raw.no_ground, "no ground plane");
 }
 
-/// A number, all of `text`, finite.
+std::string lowercase(std::string s) {
+    for (char& c : s) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+    return s;
+}
+
+/// A decimal number, all of `text`: [+-] digits [. digits] [e [+-] digits]; no hex, no inf or
+/// nan, no spaces, no empty text. Messages name the flag and the text as given.
 double parseNumber(const std::string& text, const std::string& what) {
-    char* end = nullptr;
+    if (text.empty()) usageError(what, " is empty (give a number)");
+    size_t i = 0;
+    auto digits = [&] {
+        const size_t from = i;
+        while (i < text.size() && text[i] >= '0' && text[i] <= '9') ++i;
+        return i - from;
+    };
+    if (text[i] == '+' || text[i] == '-') ++i;
+    size_t mantissa = digits();
+    if (i < text.size() && text[i] == '.') {
+        ++i;
+        mantissa += digits();
+    }
+    bool ok = mantissa > 0;
+    if (ok && i < text.size() && (text[i] == 'e' || text[i] == 'E')) {
+        ++i;
+        if (i < text.size() && (text[i] == '+' || text[i] == '-')) ++i;
+        ok = digits() > 0;
+    }
+    if (!ok || i != text.size()) {
+        const std::string low = lowercase(text);
+        if (low.find("nan") != std::string::npos || low.find("inf") != std::string::npos)
+            usageError(what, " must be finite, got '", text, "'");
+        usageError(what, ": '", text, "' is not a decimal number");
+    }
     errno = 0;
-    const double v = std::strtod(text.c_str(), &end);
-    if (text.empty() || end != text.c_str() + text.size()) usageError(what, ": '", text, "' is not a number");
-    if (!std::isfinite(v) || errno == ERANGE) usageError(what, " must be finite, got '", text, "'");
+    const double v = std::strtod(text.c_str(), nullptr);
+    if (!std::isfinite(v)) usageError(what, " is too large for a double, got '", text, "'");
+    // Underflow (below ~2.2e-308, or rounded to 0 from a nonzero text): the value is not the one typed.
+    if (errno == ERANGE) usageError(what, " is too small to represent (below ", std::numeric_limits<double>::min(), "), got '", text, "'");
     return v;
 }
 
@@ -416,20 +447,22 @@ uint32_t parseCount(const std::string& text, const std::string& what, uint32_t m
     return static_cast<uint32_t>(v);
 }
 
-/// "x,y,z" (spaces allowed) -> three finite numbers; messages name the flag and the value.
-glm::dvec3 parseVec3(std::string text, const std::string& what) {
-    const std::string given = text;
-    std::replace(text.begin(), text.end(), ',', ' ');
-    std::istringstream in(text);
-    std::string x, y, z, extra;
-    in >> x >> y >> z;
-    if (z.empty() || (in >> extra)) usageError(what, " takes x,y,z, got '", given, "'");
-    return {parseNumber(x, what + " x"), parseNumber(y, what + " y"), parseNumber(z, what + " z")};
-}
-
-std::string lowercase(std::string s) {
-    for (char& c : s) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-    return s;
+/// "x,y,z": exactly three decimal numbers separated by single commas (spaces around them allowed);
+/// messages name the flag and the value.
+glm::dvec3 parseVec3(const std::string& text, const std::string& what) {
+    std::vector<std::string> parts(1);
+    for (char c : text) {
+        if (c == ',') parts.emplace_back();
+        else if (c != ' ') parts.back() += c;
+    }
+    if (parts.size() != 3) usageError(what, " takes x,y,z (three numbers, two commas), got '", text, "'");
+    static const char* const kAxis[3] = {" x", " y", " z"};
+    glm::dvec3 v;
+    for (int k = 0; k < 3; ++k) {
+        if (parts[k].empty()) usageError(what, kAxis[k], " is empty in '", text, "' (x,y,z takes three numbers)");
+        v[k] = parseNumber(parts[k], what + kAxis[k]);
+    }
+    return v;
 }
 
 /// --out: a .png whose folder exists and is writable (checked here, before any work).
@@ -483,7 +516,6 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
                        ")");
     }
     if (volumetric) {
-        // --fog SIGMA_S,SIGMA_T: strtod reads nan and inf, which the range tests then name.
         const size_t comma = raw.fog.find(',');
         if (comma == std::string::npos || raw.fog.find(',', comma + 1) != std::string::npos)
             usageError("--fog takes SIGMA_S,SIGMA_T (scattering, extinction per world unit), got '", raw.fog, "'");
@@ -506,15 +538,15 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
     a.rotations = parseCount(raw.rotations, "--rotations", 1, 256);
     a.width = parseCount(raw.width, "--width", 1, 16384);
     a.height = parseCount(raw.height, "--height", 1, 16384);
-    if (!raw.light_radius.empty()) {
+    if (app.count("--light-radius") > 0) {
         a.light_radius = parseNumber(raw.light_radius, "--light-radius");
         if (!(a.light_radius > 0)) usageError("--light-radius must be > 0, got '", raw.light_radius, "'");
     }
-    if (!raw.light_pos.empty()) {
+    if (app.count("--light-pos") > 0) {
         a.light_pos = parseVec3(raw.light_pos, "--light-pos");
         a.has_light_pos = true;
     }
-    if (!raw.origin.empty()) a.origin = parseVec3(raw.origin, "--origin");
+    if (app.count("--origin") > 0) a.origin = parseVec3(raw.origin, "--origin");
     {
         const std::vector<std::string>& names = hard ? kHardSkips : kSoftSkips;
         a.skip_list.clear();
@@ -541,14 +573,9 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
         usageError("--frames draws light-sample sets (penumbra/light_samples.hpp): --samples must be a multiple of 32 in "
                    "[32, 1024], got '", raw.samples, "'");
     {
-        // --opacity: strtod reads nan and inf, which the range test then names.
-        char* end = nullptr;
-        const double v = std::strtod(raw.opacity.c_str(), &end);
-        if (raw.opacity.empty() || end != raw.opacity.c_str() + raw.opacity.size())
-            usageError("--opacity: '", raw.opacity, "' is not a number");
-        if (!(v >= 0.0 && v <= 1.0))
+        a.opacity = parseNumber(raw.opacity, "--opacity");
+        if (!(a.opacity >= 0.0 && a.opacity <= 1.0))
             usageError("--opacity must be in [0, 1] (the fraction of light a caster stops), got '", raw.opacity, "'");
-        a.opacity = v;
     }
     if (a.aa != "off" && a.check_skips)
         usageError("--check-skips is not used with --aa ", a.aa, " (the anti-aliased frames run with the skips as given)");
@@ -602,6 +629,13 @@ void checkLight(const penumbra::scene::Scene& scene, const glm::dvec3& centre, d
     const auto [lo, hi] = sceneBounds(scene);
     if (!(lo.x <= hi.x)) return;  // no vertices: nothing to reach
     const double distance = glm::length(centre - glm::clamp(centre, lo, hi));
+    if (distance == 0.0) {
+        std::ostringstream out;
+        out.precision(9);
+        out << "the light's centre " << vec3Text(centre) << " lies inside the scene's bounds " << vec3Text(lo) << " .. "
+            << vec3Text(hi) << ": a spherical light must lie outside them; move it with --light-pos";
+        usageError(out.str());
+    }
     if (radius >= distance) {
         std::ostringstream out;
         out.precision(9);
@@ -722,6 +756,34 @@ void checkMemory(const Args& args, size_t triangles) {
 
 // =============================================================================================
 // Running
+
+/// The light's first frustum over the view samples' box; a light no frustum can frame from there
+/// (inside the box, or seeing it wider than 85 degrees) is the user's to move: exit 2, naming the flag.
+glm::mat4 lightFrustumOrRefuse(const glm::vec4& light, const glm::vec3& lo, const glm::vec3& hi) {
+    try {
+        return penumbra::lightViewProjectionForBounds(light, lo, hi);
+    } catch (const penumbra::Error& e) {
+        usageError("--light-pos ", vec3Text(glm::dvec3(glm::vec3(light))), " cannot light the view samples from there: ", e.what());
+    }
+}
+
+/// A run whose own checks failed exits 1 after its report: --check-skips found words that differ
+/// (the skips promise never to change a bit), or an exact mode's --reference found non-tie bits
+/// that differ from the oracle. Returns the exit code.
+int checksVerdict(const char* mode, uint64_t skips_mismatched_words, uint64_t reference_mismatched, const char* what) {
+    int code = 0;
+    if (skips_mismatched_words > 0) {
+        std::fprintf(stderr, "soft_shadows: --check-skips failed: %llu shadow words of --mode %s differ with every skip off (the skips must not change a bit)\n",
+                     static_cast<unsigned long long>(skips_mismatched_words), mode);
+        code = 1;
+    }
+    if (reference_mismatched > 0) {
+        std::fprintf(stderr, "soft_shadows: --reference failed: %llu %s of --mode %s differ from the oracle (an exact mode must match it)\n",
+                     static_cast<unsigned long long>(reference_mismatched), what, mode);
+        code = 1;
+    }
+    return code;
+}
 
 double msSince(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -848,10 +910,12 @@ class DirectShading {
 public:
     DirectShading(const MergedScene& merged, const glm::dvec3& light) : merged_(merged) {
         std::vector<glm::vec3> positions(merged.positions.begin(), merged.positions.end());
+        // Creases (default 60 degrees) split a vertex into one bent vertex per smooth group: a
+        // cube's lit face is not darkened by the faces that turn away from the light at its corners.
         mesh_ = penumbra::bentNormalMesh(positions.data(), positions.size(), merged.indices.data(), merged.indices.size());
-        l_bend_.resize(positions.size());
-        for (uint32_t v = 0; v < positions.size(); ++v)
-            l_bend_[v] = penumbra::bentLight(mesh_, v, positions[v], glm::vec3(light));
+        l_bend_.resize(mesh_.bentVertexCount());
+        for (uint32_t v = 0; v < l_bend_.size(); ++v)
+            l_bend_[v] = penumbra::bentLight(mesh_, v, positions[mesh_.source[v]], glm::vec3(light));
     }
     /// n: the smooth shading normal, l: unit direction to the light, p: the point on `triangle`.
     double direct(bool bent, uint32_t triangle, const glm::dvec3& p, const glm::dvec3& n, const glm::dvec3& l) const {
@@ -868,7 +932,8 @@ public:
             u = std::clamp((d22 * glm::dot(d, e1) - d12 * glm::dot(d, e2)) / det, 0.0, 1.0);
             v = std::clamp((d11 * glm::dot(d, e2) - d12 * glm::dot(d, e1)) / det, 0.0, 1.0 - u);
         }
-        const float lb = float((1.0 - u - v) * l_bend_[t[0]] + u * l_bend_[t[1]] + v * l_bend_[t[2]]);
+        const uint32_t* corners = &mesh_.indices[size_t(triangle) * 3];  // the corners' bent vertices
+        const float lb = float((1.0 - u - v) * l_bend_[corners[0]] + u * l_bend_[corners[1]] + v * l_bend_[corners[2]]);
         return penumbra::bentDirect(lb, float(l_f));
     }
 
@@ -911,6 +976,8 @@ void writeShadingCompare(const std::string& out, const penumbra::scene::ImageRgb
 /// relative error of positions rebuilt from a 32-bit float depth buffer, so a sample is not
 /// shadowed by the very surface it was reconstructed from (docs/design.md).
 constexpr double kDepthCoplanarEpsilon = 2e-5;
+/// lightLutSetup's largest certified tolerance (penumbra/light_lut.hpp: tolerance in [0, 1e-2]).
+constexpr double kMaxLutTolerance = 1e-2;
 
 /// The view samples the GPU pipelines get, from one G-buffer pass of the camera: the engine's
 /// depth buffer (positions reconstructed on the GPU) or the G-buffer's exact surface points.
@@ -1162,7 +1229,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     // The light's frustum must see every sub-sample too: one run for them, then the box of all points.
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
-    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, v.lo, v.hi);
+    light.view_projection = lightFrustumOrRefuse(light.light, v.lo, v.hi);
     if (stencil.run(range(centres), normals, v.view, light, casters) != Status::Ok) {
         std::fprintf(stderr, "soft_shadows: the shadow-edge stencil rejected its inputs\n");
         return 1;
@@ -1174,7 +1241,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
             lo = glm::min(lo, glm::vec3(s));
             hi = glm::max(hi, glm::vec3(s));
         }
-        light.view_projection = penumbra::lightViewProjectionForBounds(light.light, lo, hi);
+        light.view_projection = lightFrustumOrRefuse(light.light, lo, hi);
     }
 
     penumbra::AliasFreeHardShadows hard(options);
@@ -1450,7 +1517,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     // The light must see the view samples: a starting frustum around their box, then §4.3 fitting.
     penumbra::SampleListsLight light;
     light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
-    light.view_projection = penumbra::lightViewProjectionForBounds(light.light, v.lo, v.hi);
+    light.view_projection = lightFrustumOrRefuse(light.light, v.lo, v.hi);
     // --skips: the options with the chosen skips on (all_off: every skip off, for --check-skips).
     auto makeOptions = [&](bool all_off) {
         penumbra::AliasFreeHardOptions o;
@@ -1597,7 +1664,8 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
             }
         }
     }
-    return 0;
+    return checksVerdict("hard", args.check_skips ? skips_check["mismatched_words"].get<uint64_t>() : 0,
+                         args.reference ? same.mismatched : 0, "view samples");
 }
 
 /// Heat map of |a - b| per pixel (visible fractions; rows flipped as the shaded images): black
@@ -1638,7 +1706,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     penumbra::scene::GpuScene gpu(scene);
     const uint32_t w = args.width, h = args.height, n = args.samples, k = args.sets;
     GpuViewSamples v(args, scene, gpu);
-    const penumbra::SoftMode mode = args.lut == "exact" ? penumbra::SoftMode::Exact
+    penumbra::SoftMode mode = args.lut == "exact" ? penumbra::SoftMode::Exact
                                     : args.lut == "lut" ? penumbra::SoftMode::Lut
                                                         : penumbra::SoftMode::Brute;
 
@@ -1665,7 +1733,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     // regions are built on this grid on the host.
     penumbra::SampleListsLight fit_light;
     fit_light.light = glm::vec4(glm::vec3(light_pos), 1.0f);
-    fit_light.view_projection = penumbra::lightViewProjectionForBounds(fit_light.light, v.lo, v.hi);
+    fit_light.view_projection = lightFrustumOrRefuse(fit_light.light, v.lo, v.hi);
     penumbra::SampleListsOptions fit_options;
     fit_options.cull_back_facing = false;  // as the soft pipeline builds its lists
     fit_options.depth_range = penumbra::LightDepthRange::Unclipped;
@@ -1726,15 +1794,31 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         o.skips.wedges = !all_off && args.skip("wedge");
         return o;
     };
-    const penumbra::SampleBasedSoftGpuOptions options = makeOptions(false);
+    penumbra::SampleBasedSoftGpuOptions options = makeOptions(false);
 
     // The LUT (sintorn2008 §4.2), generated on the GPU; certified for Exact, with the tolerance
-    // that lets Exact prove pairs at this coplanar epsilon (sampleBasedSoftLutTolerance).
+    // that lets Exact prove pairs at this coplanar epsilon (sampleBasedSoftLutTolerance). A light
+    // that is tiny or far for the scene needs a tolerance past what a LUT can certify (1e-2): the
+    // LUT could vouch for no bit, so Exact tests every light sample (Brute: the same exact bits).
+    double lut_tolerance = 0;
+    bool exact_by_brute = false;
+    if (mode == penumbra::SoftMode::Exact) {
+        lut_tolerance = penumbra::sampleBasedSoftLutTolerance(options, sets.frame, box_lo, box_hi);
+        if (lut_tolerance > kMaxLutTolerance) {
+            std::fprintf(stderr, "soft_shadows: --lut exact: this light (radius %g, %g from the scene's box) needs a LUT "
+                                 "tolerance of %.3g, past the %.0e a LUT can certify; every light sample is tested "
+                                 "(as --lut brute: the same exact bits, slower)\n",
+                         light_radius, glm::length(light_pos - glm::clamp(light_pos, box_lo, box_hi)), lut_tolerance,
+                         kMaxLutTolerance);
+            mode = penumbra::SoftMode::Brute;
+            options = makeOptions(false);
+            exact_by_brute = true;
+        }
+    }
     penumbra::LightLutOptions lut_options;
     lut_options.resolution = args.lut_res;
     lut_options.certified = mode == penumbra::SoftMode::Exact;
-    if (mode == penumbra::SoftMode::Exact)
-        lut_options.tolerance = penumbra::sampleBasedSoftLutTolerance(options, sets.frame, box_lo, box_hi);
+    if (mode == penumbra::SoftMode::Exact) lut_options.tolerance = lut_tolerance;
     std::unique_ptr<penumbra::LightLutSetup> lut;
     penumbra::gl::Buffer lut_buffer;
     penumbra::BufferRange lut_table;
@@ -1742,6 +1826,9 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         lut = std::make_unique<penumbra::LightLutSetup>(penumbra::lightLutSetup(sets, lut_options));
         lut_buffer = penumbra::gl::Buffer(lut->tableBytes());
         lut_table = {lut_buffer.id(), 0, lut->tableBytes()};
+        std::fprintf(stderr, "soft_shadows: generating the %s light-sample LUT on the GPU: %u^3 texels per table, %s...\n",
+                     lut_options.certified ? "certified" : "seed's", args.lut_res, gib(double(lut->tableBytes())).c_str());
+        const auto t_lut = std::chrono::steady_clock::now();
         penumbra::LightLutGenerator generator;
         generator.reserve(*lut);
         generator.validate(*lut, lut_table);
@@ -1750,6 +1837,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
             return 1;
         }
         glFinish();
+        std::fprintf(stderr, "soft_shadows: LUT done in %.1f s\n", msSince(t_lut) * 1e-3);
     }
     const double lut_ms = msSince(t0);
 
@@ -2027,6 +2115,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         j["soft"] = {{"lut", args.lut},
                      {"lut_res", args.lut_res},
                      {"lut_tolerance", lut_options.tolerance},
+                     {"exact_by_brute", exact_by_brute},
                      {"lut_bytes", lut ? lut->tableBytes() : 0},
                      {"grid", args.grid},
                      {"view_samples", args.view_samples},
@@ -2092,7 +2181,9 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
                         args.frames_reference);
         }
     }
-    return 0;
+    const bool exact_mode = args.lut != "lut";  // exact and brute equal the oracle; lut is the seed's approximation
+    return checksVerdict("soft", args.check_skips ? skips_check["mismatched_words"].get<uint64_t>() : 0,
+                         args.reference && exact_mode ? reference_json["mismatched_bits"].get<uint64_t>() : 0, "shadow bits");
 }
 
 // --mode reference: soft shadows from the oracle, every (view sample, light sample) pair.
@@ -2311,7 +2402,7 @@ int runHpc(const Args& args, const penumbra::scene::Scene& scene, const penumbra
             std::printf("reference: %s of %s bits differ from the oracle (%s ties)\n", reference_json["mismatched_bits"].dump().c_str(),
                         reference_json["total_bits"].dump().c_str(), reference_json["ties"].dump().c_str());
     }
-    return 0;
+    return checksVerdict("hpc", 0, args.reference ? reference_json["mismatched_bits"].get<uint64_t>() : 0, "shadow bits");
 }
 
 int runReference(const Args& args, const penumbra::scene::Scene& scene, const penumbra::reference::VisibilityOracle& oracle,
@@ -3009,8 +3100,32 @@ int runVolumetric(const Args& args, const penumbra::scene::Scene& scene, const p
 /// oracle see is camera-relative — world minus the camera's world position, subtracted in double
 /// and rounded once to float (penumbra::relativePosition) — so float precision does not depend on
 /// how far from the world origin the scene is. `light_pos` (the scene's frame) moves along.
+//
+// The range it supports: |origin| (each axis) up to kOriginRange = 2^26 times the scene's extent
+// (its box diagonal). The two double roundings (of world = p + origin and of the camera's world
+// position) then move a point by at most 2^-52 * 2^26 * extent = extent / 2^26 before the float
+// rounding, an eighth of a float ulp at the scene's extent (2^-23 relative): the renderers see
+// the untranslated scene's floats to within one float rounding, and the GPU and the oracle see
+// the very same floats. Beyond it the doubles shred the geometry (at 1e15 for a unit scene, a
+// point moves by 0.06), so the run is refused.
+constexpr double kOriginRange = 67108864.0;  // 2^26
+
 void applyOrigin(penumbra::scene::Scene& scene, const glm::dvec3& origin, glm::dvec3& light_pos) {
     if (origin == glm::dvec3(0.0)) return;
+    {
+        const auto [lo, hi] = sceneBounds(scene);
+        const double extent = lo.x <= hi.x ? glm::length(hi - lo) : 0.0;
+        const double reach = std::max({std::fabs(origin.x), std::fabs(origin.y), std::fabs(origin.z)});
+        if (!(reach <= kOriginRange * extent)) {
+            std::ostringstream out;
+            out.precision(9);
+            out << "--origin " << vec3Text(origin) << " is beyond the range this scene supports: |x|, |y|, |z| <= 2^26 x "
+                << "the scene's extent " << extent << " = " << kOriginRange * extent
+                << " (farther, the double roundings of world positions move points by more than 1/8 of a float ulp "
+                   "of the scene's size)";
+            usageError(out.str());
+        }
+    }
     const glm::dvec3 frame = glm::dvec3(scene.camera.eye) + origin;
     auto relative = [&](const glm::vec3& p) { return penumbra::relativePosition(glm::dvec3(p) + origin, frame); };
     for (auto& mesh : scene.meshes) {
@@ -3022,7 +3137,7 @@ void applyOrigin(penumbra::scene::Scene& scene, const glm::dvec3& origin, glm::d
     light_pos = (light_pos + origin) - frame;
 }
 
-penumbra::scene::Scene loadScene(const Args& args) {
+penumbra::scene::Scene loadSceneUnchecked(const Args& args) {
     penumbra::scene::Scene scene;
     if (args.scene.rfind("builtin:", 0) == 0) {
         scene = penumbra::scene::load(args.scene);
@@ -3034,9 +3149,30 @@ penumbra::scene::Scene loadScene(const Args& args) {
     } else {
         penumbra::scene::ObjOptions options;
         options.ground = args.ground;
-        scene = penumbra::scene::loadObj(args.scene, options);
+        Progress progress("loading the OBJ", 1000);
+        options.progress = [&](double f) {
+            progress.update(static_cast<size_t>(f * 1000.0));
+            return true;
+        };
+        penumbra::scene::ObjReport report;
+        scene = penumbra::scene::loadObj(args.scene, options, report);
+        for (const std::string& w : report.warnings) std::fprintf(stderr, "soft_shadows: warning: %s\n", w.c_str());
     }
     return scene;
+}
+
+/// --scene: a scene that cannot be loaded (no such file, a parse error, an unknown built-in) is
+/// bad input: exit 2 with the loader's message, which names the file and line.
+penumbra::scene::Scene loadScene(const Args& args) {
+    try {
+        return loadSceneUnchecked(args);
+    } catch (const UsageError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        usageError("--scene '", args.scene, "' cannot be loaded: ", e.what());
+    }
 }
 
 }  // namespace
@@ -3066,7 +3202,8 @@ int main(int argc, char** argv) {
                "             --fog SIGMA_S,SIGMA_T (0.05,0.08); --reference: RMSE against ray marching the shadow map\n"
                "             (reference.rmse) and with exact visibility (reference.rmse_oracle); writes <out>_airlight.png\n"
                "Built-in scenes: torus_knot columns hairball grass. Progress of long phases goes to stderr.\n"
-               "Exit codes: 0 done, 1 failed while running, 2 bad arguments or a run that cannot work.");
+               "Exit codes: 0 done, 1 failed while running or a check asked for (--check-skips, an exact mode's --reference)\n"
+               "found a difference, 2 bad arguments or a run that cannot work.");
     addOptions(app, args, raw);
     try {
         app.parse(argc, argv);

@@ -227,9 +227,17 @@ inline glm::mat4 lightViewProjectionForBounds(const glm::vec4& light, const glm:
             min_depth = std::min(min_depth, depth);
             max_depth = std::max(max_depth, depth);
         }
+        // A corner at or behind the light's plane has no cone angle: say so rather than print one.
+        PENUMBRA_CHECK(min_depth > 0.0f, "penumbra::lightViewProjectionForBounds: the point light (", eye.x, ", ", eye.y,
+                       ", ", eye.z, ") lies inside or beside the box (", lo.x, ", ", lo.y, ", ", lo.z, ") .. (", hi.x, ", ",
+                       hi.y, ", ", hi.z, "): part of the box is behind it, so no frustum from it sees all of the box; "
+                       "move the light out of the box or use one frustum per cube face");
         PENUMBRA_CHECK(max_angle < 1.4835f, "penumbra::lightViewProjectionForBounds: the point light (", eye.x, ", ",
                        eye.y, ", ", eye.z, ") would need a cone of half-angle ", max_angle * 57.2958f,
                        " degrees (> 85) to see the box: inside it or too close; use one frustum per cube face");
+        // A box seen under (almost) no angle (one view sample, or all on one point) still gets a
+        // finite frustum: at least 1e-4 rad, so that no entry of the matrix exceeds ~1e4.
+        max_angle = std::max(max_angle, 1e-4f);
         const glm::vec3 up = std::abs(dir.y) > 0.99f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
         const float near_plane = std::max(1e-3f * std::max(min_depth, 0.0f), 1e-6f * max_depth);
         // The cone's half-angle bounds every corner's angle; the square frustum's half-angle per
