@@ -560,6 +560,74 @@ TEST_CASE("closed form: disk light behind a half-plane occluder") {
     CHECK(worst < 3e-3);
 }
 
+TEST_CASE("closed form: far lights keep their shadows (light at 1e2 ... 1e49)") {
+    // Issue 41 item 3. Floor z = 0 over [-2, 2]^2 (16 x 16 cells) and an occluder quad
+    // [-0.5, 0.5] x [-0.25, 0.25] at z = h; lights along the fixed direction u, of fixed angular
+    // size: a centre D u and four samples D (u + 0.02 (+-1, +-1, 0)). The open segment p -> s
+    // is blocked iff it crosses z = h inside the quad, at t = (h - pz) / (sz - pz): the closed
+    // form, in long double. Receivers lie on the floor, 1e-3 above it and in the air (z = 0.2).
+    // The tolerances must follow the scene's scale, not the segment's length: the blocked set is
+    // the closed form at every D, no pair is a tie, and the work stays that of a near light.
+    Mesh mesh;
+    mesh.gridZ(-2, 2, -2, 2, 0.0, 16, 16);
+    const double h = 0.5;
+    mesh.gridZ(-0.5, 0.5, -0.25, 0.25, h, 2, 1);
+    const VisibilityOracle oracle(mesh.positions, mesh.indices);
+    const dvec3 u(0.3, -0.2, 1.0);
+    std::vector<dvec3> receivers;
+    for (double z : {0.0, 1e-3, 0.2})
+        for (int i = 0; i < 24; ++i)
+            for (int j = 0; j < 24; ++j) receivers.push_back({-1.9 + 0.16 * i + 0.0071, -1.9 + 0.16 * j + 0.0037, z});
+    const std::vector<dvec3> offsets{dvec3(0), dvec3(1, 1, 0), dvec3(1, -1, 0), dvec3(-1, 1, 0), dvec3(-1, -1, 0)};
+
+    uint64_t near_tests = 0;
+    for (double distance : {1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e15, 1e20, 1e30, 1e40, 1e49}) {
+        CAPTURE(distance);
+        std::vector<dvec3> samples;
+        for (const dvec3& o : offsets) samples.push_back(distance * (u + 0.02 * o));
+        const VisibilityResult result = oracle.evaluate(receivers, samples);
+        size_t checked = 0, shadowed = 0, wrong = 0;
+        for (size_t r = 0; r < receivers.size(); ++r)
+            for (size_t s = 0; s < samples.size(); ++s) {
+                using L = long double;
+                const dvec3& p = receivers[r];
+                const dvec3& q = samples[s];
+                const L t = (L(h) - L(p.z)) / (L(q.z) - L(p.z));
+                const L x = L(p.x) + t * (L(q.x) - L(p.x)), y = L(p.y) + t * (L(q.y) - L(p.y));
+                const L margin = std::min(std::fabs(std::fabs(x) - 0.5L), std::fabs(std::fabs(y) - 0.25L));
+                if (margin < 1e-6L) continue;  // too close to the shadow's edge for a closed form
+                const bool expected = t > 0 && t < 1 && std::fabs(x) < 0.5L && std::fabs(y) < 0.25L;
+                ++checked;
+                shadowed += expected;
+                wrong += result.isBlocked(r, s) != expected;
+            }
+        MESSAGE("D = " << distance << ": " << shadowed << " of " << checked << " pairs in shadow, " << wrong
+                       << " wrong, ties " << result.tie_count << ", tests/segment "
+                       << double(result.triangle_tests) / double(receivers.size() * samples.size()));
+        CHECK(checked == receivers.size() * samples.size());
+        CHECK(shadowed > 300);
+        CHECK(wrong == 0);
+        CHECK(result.tie_count == 0);
+        if (distance == 1e2) near_tests = result.triangle_tests;
+        CHECK(result.triangle_tests <= 2 * near_tests);
+        if (distance == 1e2 || distance == 1e10 || distance == 1e49)
+            checkIdentical(result, oracle.evaluateBruteForce(receivers, samples), "far light");
+        bool tie = true;
+        CHECK(oracle.segmentBlocked(dvec3(0.0071, 0.0037, 0.0), samples[0], &tie));  // under the quad's centre
+        CHECK_FALSE(tie);
+        // A vertical segment exactly through the quad's edge x = 0.5 is a tie; 1e-7 inside it
+        // (>> tie_epsilon * the scene's extent 4) is a robust hit.
+        CHECK(oracle.segmentBlocked(dvec3(0.5 - 1e-7, 0.1, 0.0), dvec3(0.5 - 1e-7, 0.1, distance), &tie));
+        CHECK_FALSE(tie);
+        oracle.segmentBlocked(dvec3(0.5, 0.1, 0.0), dvec3(0.5, 0.1, distance), &tie);
+        CHECK(tie);
+    }
+    // Beyond the coordinate limit the oracle refuses, naming the value and the limit.
+    const std::string message = errorOf([&] { oracle.evaluate(receivers, {2e50 * u}); });
+    CHECK(contains(message, "light_samples[0]"));
+    CHECK(contains(message, "1e+50"));
+}
+
 // ================================================================================================
 // BVH vs brute force
 

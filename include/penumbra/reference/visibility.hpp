@@ -41,7 +41,10 @@
 //     "The line passes through T" = all edge functions >= 0 or all <= 0, not all == 0. Then
 //     t = T / det as in the paper, and hit(T) = 0 < t < 1.
 //  2. Coplanar rule. Let n = (v1 - v0) x (v2 - v0) and
-//         scale = max(|v0 - p|_inf, |v1 - p|_inf, |v2 - p|_inf, |s - p|_inf).
+//         scale = max(|v0 - p|_inf, |v1 - p|_inf, |v2 - p|_inf, min(|s - p|_inf, E)),
+//     E = sceneExtent() (|hi - lo|_inf of the mesh's box). Rounding scales with the triangle's
+//     distance, not the segment's length: capped at E, a far light keeps the scene's tolerances up
+//     to the 1e50 coordinate bound (uncapped, a light at 1e10 ignored every triangle; issue 41).
 //     If the distance from p to the closed triangle T itself is <= coplanar_epsilon * scale, T is
 //     IGNORED for this pair (no hit, no tie), and likewise for the distance from s. In exact
 //     arithmetic a triangle containing p (or s) can only touch the segment at that endpoint, which
@@ -55,15 +58,16 @@
 //     blocked by the surface itself; light-back-facing shading darkens it anyway (BLOCKS.md
 //     §3.3/§4.3).
 //  3. Ties. T is FRAGILE for the pair when any of:
-//       a) the line passes through T and |t| <= tie_epsilon or |t - 1| <= tie_epsilon;
+//       a) the line passes through T and |t| <= t_eps or |t - 1| <= t_eps, where
+//          t_eps = tie_epsilon * min(1, scale / |s - p|_inf) (tie_epsilon * scale along the ray);
 //       b) the line passes within tie_epsilon * scale of an edge of T (end vertices included),
-//          at a ray parameter in [-tie_epsilon, 1 + tie_epsilon]. The distance is measured in the
+//          at a ray parameter in [-t_eps, 1 + t_eps]. The distance is measured in the
 //          sheared frame, i.e. in the plane perpendicular to the ray's dominant axis: between 1
 //          and sqrt(3) times the Euclidean distance from the edge point to the line;
 //       c) the line passes through T but the plane-side test (signs of n.(v0 - p), n.(v0 - s))
 //          disagrees with hit(T): the crossing is so grazing that t cannot be trusted.
 //  4. Locality. T only counts (hit or fragile) when its bounding box, grown on every side by
-//     (4 * tie_epsilon + 1e-12) * max(|box corner - p|_inf, |s - p|_inf), touches the closed
+//     (4 * tie_epsilon + 1e-12) * max(|box corner - p|_inf, min(|s - p|_inf, E)), touches the closed
 //     segment [p, s] (slab test). In exact arithmetic this never removes a hit or a tie; it pins
 //     down the numerically meaningless grazing cases, which is what makes the BVH and the brute-
 //     force loop agree bit for bit.
@@ -341,7 +345,7 @@ inline void triangleBox(const Triangle& tri, glm::dvec3& lo, glm::dvec3& hi) {
 
 /// Rule 3b for one edge P -> Q in the sheared frame (z in ray-parameter units).
 inline bool nearEdge(double px, double py, double pz, double qx, double qy, double qz, double edge_function,
-                     double rho, double tie_epsilon) {
+                     double rho, double t_eps) {
     const double ex = qx - px;
     const double ey = qy - py;
     // |P x Q| = |E| * (distance of the origin to the edge's line) and |E|_1 >= |E|_2.
@@ -353,24 +357,43 @@ inline bool nearEdge(double px, double py, double pz, double qx, double qy, doub
     const double dy = py + mul(lambda, ey);
     if (mul(dx, dx) + mul(dy, dy) > rho * rho) return false;
     const double t = pz + mul(lambda, qz - pz);
-    return t >= -tie_epsilon && t <= 1.0 + tie_epsilon;
+    return t >= -t_eps && t <= 1.0 + t_eps;
 }
 
 struct SegmentQuery {
     Ray ray;
     double tie_epsilon = 0;
     double coplanar_epsilon = 0;
-    double inflation = 0;  // rule 4: 4 * tie_epsilon + kBoxSlack
+    double inflation = 0;      // rule 4: 4 * tie_epsilon + kBoxSlack
+    double segment_scale = 0;  // min(|s - p|_inf, scene extent): the segment's term in every scale
 };
 
+/// Extent of the scene for the tolerances' scale: |hi - lo|_inf of the triangles' bounding box
+/// (0 when empty). The oracle uses its non-degenerate triangles; a caller of classifySegment
+/// matches the oracle's bits by passing the same mesh's value to makeSegmentQuery.
+inline double sceneExtent(const std::vector<Triangle>& triangles) {
+    if (triangles.empty()) return 0.0;
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const Triangle& tri : triangles) {
+        lo = glm::min(lo, glm::min(tri.v0, glm::min(tri.v1, tri.v2)));
+        hi = glm::max(hi, glm::max(tri.v0, glm::max(tri.v1, tri.v2)));
+    }
+    return maxAbs(hi - lo);
+}
+
+/// `scene_extent` caps the segment's length in the tolerances (rules 2-4): a light far outside
+/// the scene must not widen them (issue 41). +infinity (the default) = the uncapped rule, which
+/// equals the capped one whenever |s - p|_inf <= the extent.
 inline SegmentQuery makeSegmentQuery(const glm::dvec3& receiver, const glm::dvec3& sample,
-                                     const reference::VisibilityOptions& options) {
+                                     const reference::VisibilityOptions& options,
+                                     double scene_extent = std::numeric_limits<double>::infinity()) {
     SegmentQuery query;
     query.ray = makeRay(receiver, sample - receiver);
     query.ray.end = sample;
     query.tie_epsilon = options.tie_epsilon;
     query.coplanar_epsilon = options.coplanar_epsilon;
     query.inflation = mul(4.0, options.tie_epsilon) + kBoxSlack;
+    query.segment_scale = std::min(query.ray.dir_scale, scene_extent);
     return query;
 }
 
@@ -391,9 +414,12 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     const bool positive = u > 0.0 || v > 0.0 || w > 0.0;
     const bool inside = negative != positive;
 
-    const double scale = std::max(std::max(ray.dir_scale, maxAbs(a)), std::max(maxAbs(b), maxAbs(c)));
+    const double scale = std::max(std::max(query.segment_scale, maxAbs(a)), std::max(maxAbs(b), maxAbs(c)));
     const double eps = query.tie_epsilon;
     const double rho = eps * scale;
+    // Rule 3's parameter window: eps * scale in length along the ray (t's rounding is relative to
+    // the triangle's scale, not to the segment's length); = eps when scale >= |s - p|_inf.
+    const double t_eps = scale < ray.dir_scale ? eps * (scale / ray.dir_scale) : eps;
     const double az = ray.sz * a[kz], bz = ray.sz * b[kz], cz = ray.sz * c[kz];  // ray-parameter units
 
     Verdict verdict;
@@ -401,12 +427,12 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
         const double det = u + v + w;  // same-sign terms: no cancellation, never 0
         const double t = (mul(u, az) + mul(v, bz) + mul(w, cz)) / det;
         verdict.hit = t > 0.0 && t < 1.0;
-        verdict.fragile = std::fabs(t) <= eps || std::fabs(t - 1.0) <= eps;
+        verdict.fragile = std::fabs(t) <= t_eps || std::fabs(t - 1.0) <= t_eps;
         verdict.t = t;
     }
     if (!verdict.fragile) {
-        verdict.fragile = nearEdge(bx, by, bz, cx, cy, cz, u, rho, eps) || nearEdge(cx, cy, cz, ax, ay, az, v, rho, eps) ||
-                          nearEdge(ax, ay, az, bx, by, bz, w, rho, eps);
+        verdict.fragile = nearEdge(bx, by, bz, cx, cy, cz, u, rho, t_eps) || nearEdge(cx, cy, cz, ax, ay, az, v, rho, t_eps) ||
+                          nearEdge(ax, ay, az, bx, by, bz, w, rho, t_eps);
     }
     if (!inside && !verdict.fragile) return {};  // the common case: a clear miss
 
@@ -426,7 +452,7 @@ inline Verdict classifySegment(const Triangle& tri, const SegmentQuery& query) {
     glm::dvec3 lo, hi;
     triangleBox(tri, lo, hi);
     double t_near = 0.0, t_far = 1.0;
-    if (!slabs(lo, hi, ray, query.inflation, ray.dir_scale, t_near, t_far)) return {};
+    if (!slabs(lo, hi, ray, query.inflation, query.segment_scale, t_near, t_far)) return {};
     return verdict;
 }
 
@@ -510,7 +536,7 @@ public:
         const Ray& ray = query.ray;
         double t_near = 0.0, t_far = 1.0;
         ++counters.nodes;
-        if (!slabs(nodes_[0].lo, nodes_[0].hi, ray, query.inflation, ray.dir_scale, t_near, t_far)) return {};
+        if (!slabs(nodes_[0].lo, nodes_[0].hi, ray, query.inflation, query.segment_scale, t_near, t_far)) return {};
         Verdict result;
         uint32_t stack[kStackSize];
         int top = 0;
@@ -528,9 +554,10 @@ public:
             } else {
                 const uint32_t left = node.first;
                 double near_l = 0.0, far_l = 1.0, near_r = 0.0, far_r = 1.0;
-                const bool hit_l = slabs(nodes_[left].lo, nodes_[left].hi, ray, query.inflation, ray.dir_scale, near_l, far_l);
+                const bool hit_l =
+                    slabs(nodes_[left].lo, nodes_[left].hi, ray, query.inflation, query.segment_scale, near_l, far_l);
                 const bool hit_r =
-                    slabs(nodes_[left + 1].lo, nodes_[left + 1].hi, ray, query.inflation, ray.dir_scale, near_r, far_r);
+                    slabs(nodes_[left + 1].lo, nodes_[left + 1].hi, ray, query.inflation, query.segment_scale, near_r, far_r);
                 counters.nodes += 2;
                 if (hit_l && hit_r) {
                     const bool right_first = near_r < near_l;
@@ -797,6 +824,9 @@ public:
     size_t degenerateTriangleCount() const { return triangle_count_ - bvh_.triangles().size(); }
     size_t bvhNodeCount() const { return bvh_.nodes().size(); }
     int bvhDepth() const { return bvh_.depth(); }
+    /// E of the tolerances' scale (header comment, rule 2): |hi - lo|_inf of the non-degenerate
+    /// triangles' bounding box; 0 for an empty mesh.
+    double sceneExtent() const { return scene_extent_; }
 
     /// Is the open segment (receiver, light_sample) blocked? *tie (optional) receives the tie bit.
     /// Default options. Throws penumbra::Error for non-finite input.
@@ -847,6 +877,7 @@ private:
     void build(const std::vector<glm::dvec3>& positions, const std::vector<uint32_t>& indices) {
         std::vector<detail::oracle::Triangle> triangles = detail::oracle::oracleTriangles(positions, indices, "VisibilityOracle");
         triangle_count_ = indices.size() / 3;
+        scene_extent_ = detail::oracle::sceneExtent(triangles);
         linear_ = triangles;  // caller order, for the brute-force paths
         bvh_.build(std::move(triangles));
     }
@@ -856,7 +887,7 @@ private:
                                   detail::oracle::Counters& counters) const {
         namespace oracle = detail::oracle;
         if (receiver == sample) return {};  // empty open segment
-        const oracle::SegmentQuery segment = oracle::makeSegmentQuery(receiver, sample, options);
+        const oracle::SegmentQuery segment = oracle::makeSegmentQuery(receiver, sample, options, scene_extent_);
         if (!brute_force) return bvh_.anyHit(segment, counters);
         oracle::Verdict result;
         for (const oracle::Triangle& tri : linear_) {
@@ -952,6 +983,7 @@ private:
     }
 
     size_t triangle_count_ = 0;
+    double scene_extent_ = 0;  // detail::oracle::sceneExtent of linear_
     std::vector<detail::oracle::Triangle> linear_;  // non-degenerate, caller order
     detail::oracle::Bvh bvh_;
 };
