@@ -5,7 +5,8 @@
 #   2. an ASan+UBSan build (-DPENUMBRA_SANITIZE=ON) running the CPU tests (label `cpu`, leak
 #      checking on) and the GL tests on EGL (their CPU twins and host code; leak checking and the
 #      new/free mismatch check off there: Mesa's drivers keep allocations until exit, and its LLVM
-#      JIT frees with free() what it allocated with a nothrow new).
+#      JIT frees with free() what it allocated with a nothrow new), then the demo on the hostile
+#      inputs (label `hostile`: every mode at small sizes, bad flags and OBJ files).
 # Environment: PENUMBRA_BUILD_DIR (default build), PENUMBRA_SKIP_SANITIZE=1 to skip step 2.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -21,17 +22,22 @@ if [ "${PENUMBRA_SKIP_SANITIZE:-0}" != 1 ]; then
   # -g1: line tables only (what the sanitizers' stack traces print), much quicker to build than -g.
   cmake -S "$root" -B "$asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPENUMBRA_SANITIZE=ON \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
-        -DPENUMBRA_BUILD_BENCHMARKS=OFF -DPENUMBRA_BUILD_EXAMPLES=OFF
+        -DPENUMBRA_BUILD_BENCHMARKS=OFF -DPENUMBRA_BUILD_EXAMPLES=ON
   cmake --build "$asan" -j"$jobs"
   echo "== sanitizer run (ASan+UBSan, CPU tests) =="
   (cd "$asan" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-     ctest --output-on-failure -j"$jobs" -L cpu -LE stress)
+     ctest --output-on-failure -j"$jobs" -L cpu -LE "stress|example")
   echo "== sanitizer run (ASan+UBSan, GL tests on EGL) =="
   # alloc_dealloc_mismatch=0: Mesa's LLVM (libLLVM-15) frees with free() what it allocated with a
   # nothrow operator new when llvmpipe destroys a program's JIT; that is inside the driver, not
   # penumbra (the CPU run above keeps the check on).
   (cd "$asan" && ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0 UBSAN_OPTIONS=print_stacktrace=1 \
-     ctest --output-on-failure -j"$jobs" -L egl -LE "stress|bench")
+     ctest --output-on-failure -j"$jobs" -L egl -LE "stress|bench|example")
+  echo "== sanitizer run (ASan+UBSan, the demo on hostile inputs: every mode at small sizes, bad flags, bad OBJ files) =="
+  (cd "$asan" && ASAN_OPTIONS=detect_leaks=1:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+     ctest --output-on-failure -j"$jobs" -L hostile -LE gl)
+  (cd "$asan" && ASAN_OPTIONS=detect_leaks=0:alloc_dealloc_mismatch=0:exitcode=86 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+     ctest --output-on-failure -j"$jobs" -L hostile -LE cpu)
 fi
 
 echo "== main run =="

@@ -479,6 +479,14 @@ void checkOutPath(const std::string& out) {
     if (fs::is_directory(path, error)) usageError("--out '", out, "' is a folder");
     if (fs::exists(path, error) && ::access(path.c_str(), W_OK) != 0)
         usageError("--out '", out, "' exists and is not writable (", std::strerror(errno), ")");
+    // access() says yes to root everywhere (/proc, read-only mounts): create the file to be sure,
+    // and remove it again, so a failing run leaves nothing behind.
+    if (!fs::exists(path, error)) {
+        std::FILE* probe = std::fopen(out.c_str(), "wb");
+        if (probe == nullptr) usageError("--out '", out, "' cannot be created (", std::strerror(errno), ")");
+        std::fclose(probe);
+        std::remove(out.c_str());
+    }
 }
 
 /// --mode dsm's options (box filter over the texel's own sub-samples, one level: the lookup is
@@ -555,7 +563,10 @@ void checkArgs(const CLI::App& app, Args& a, const RawArgs& raw) {
         } else if (a.skips != "none") {
             std::istringstream in(a.skips);
             std::string name;
+            if (a.skips.empty() || a.skips.front() == ',' || a.skips.back() == ',')
+                usageError("--skips: '", a.skips, "' has an empty name (all, none, or a comma list of names)");
             while (std::getline(in, name, ',')) {
+                if (name.empty()) usageError("--skips: '", a.skips, "' has an empty name (all, none, or a comma list of names)");
                 if (std::find(names.begin(), names.end(), name) == names.end()) {
                     std::string valid;
                     for (const std::string& n : names) valid += (valid.empty() ? "" : ", ") + n;
@@ -765,6 +776,14 @@ glm::mat4 lightFrustumOrRefuse(const glm::vec4& light, const glm::vec3& lo, cons
     } catch (const penumbra::Error& e) {
         usageError("--light-pos ", vec3Text(glm::dvec3(glm::vec3(light))), " cannot light the view samples from there: ", e.what());
     }
+}
+
+/// Fault injection for the tests of the checks themselves (ctest's soft_shadows.hostile.*):
+/// PENUMBRA_DEMO_FAULT=skips flips one bit of the skips-on masks before --check-skips compares
+/// them, =reference flips bit 0 of every mask before --reference compares them with the oracle.
+bool faultInjected(const char* what) {
+    const char* fault = std::getenv("PENUMBRA_DEMO_FAULT");
+    return fault != nullptr && std::strcmp(fault, what) == 0;
 }
 
 /// A run whose own checks failed exits 1 after its report: --check-skips found words that differ
@@ -1874,7 +1893,8 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     // uncut regions, no culling, no cut, every fragment set up; masks word for word.
     Json skips_check;
     if (args.check_skips) {
-        const std::vector<uint32_t> masks_on = pipeline.readMasks();
+        std::vector<uint32_t> masks_on = pipeline.readMasks();
+        if (faultInjected("skips") && !masks_on.empty()) masks_on[0] ^= 1u;
         const LightGrid off_grid = lightGrid(false, false);
         penumbra::SampleBasedSoftShadows off(makeOptions(true), sets, lut.get(), off_grid.influence, off_grid.vp);
         off.reserve(w * h);
@@ -2034,7 +2054,9 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
     double reference_ms = 0;
     if (args.reference) {
         t0 = std::chrono::steady_clock::now();
-        const std::vector<uint32_t> masks = pipeline.readMasks();
+        std::vector<uint32_t> masks = pipeline.readMasks();
+        if (faultInjected("reference"))
+            for (size_t i = 0; i < masks.size(); i += words) masks[i] ^= 1u;
         penumbra::reference::VisibilityOptions vo;
         vo.coplanar_epsilon = options.oracle.coplanar_epsilon;
         vo.tie_epsilon = options.oracle.tie_epsilon;
@@ -3205,6 +3227,15 @@ int main(int argc, char** argv) {
                "Exit codes: 0 done, 1 failed while running or a check asked for (--check-skips, an exact mode's --reference)\n"
                "found a difference, 2 bad arguments or a run that cannot work.");
     addOptions(app, args, raw);
+    // "--flag=" with nothing after '=': CLI11 would then blame the next argument; name the flag.
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg.size() > 3 && arg.compare(0, 2, "--") == 0 && arg.back() == '=') {
+            std::fprintf(stderr, "soft_shadows: %s is empty (give a value after '=')\n(soft_shadows --help lists the options)\n",
+                         arg.substr(0, arg.size() - 1).c_str());
+            return 2;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -585,14 +585,18 @@ inline Scene loadObjText(const std::string& text, const std::string& where, cons
     mesh.indices.reserve(triangles.size() * 3);
     for (const auto& triangle : triangles)
         for (uint32_t v : triangle) mesh.indices.push_back(remap[v]);
-    // A file whose every triangle has no area (collinear corners) casts nothing and shows nothing:
+    // A file whose every triangle has no area (collinear corners, to within float rounding in the
+    // unit box) casts nothing and shows nothing:
     // refused rather than rendered as an empty scene.
     {
         size_t flat = 0;
         for (const auto& triangle : triangles) {
-            const glm::dvec3 a = file_positions[triangle[0]], b = file_positions[triangle[1]], c = file_positions[triangle[2]];
+            // Normalised first: 1e-300-sized coordinates would underflow the cross product.
+            const glm::dvec3 a = (file_positions[triangle[0]] - anchor) / extent;
+            const glm::dvec3 b = (file_positions[triangle[1]] - anchor) / extent;
+            const glm::dvec3 c = (file_positions[triangle[2]] - anchor) / extent;
             const glm::dvec3 n = glm::cross(b - a, c - a);
-            flat += n.x == 0.0 && n.y == 0.0 && n.z == 0.0;
+            flat += glm::length(n) <= 1e-14;  // below float's ulp^2 in the unit box: no area once rounded
         }
         PENUMBRA_CHECK(flat < triangles.size(), where, "every one of the ", triangles.size(),
                        " triangles has zero area (collinear corners): nothing to render");

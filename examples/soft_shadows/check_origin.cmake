@@ -1,0 +1,48 @@
+# Far from the origin within the stated range (issue 41): runs soft_shadows (ARGS, '|'-separated,
+# with --json --reference) at --origin 0,0,0 and at --origin ORIGIN, and requires both runs to
+# equal the oracle (0 mismatched) and the same mean visible fraction within TOLERANCE (the camera-
+# relative floats differ by at most one rounding, so a handful of boundary samples may flip).
+# Invoked by ctest (examples/CMakeLists.txt).
+string(REPLACE "|" ";" args "${ARGS}")
+set(means)
+foreach(origin 0,0,0 ${ORIGIN})
+    execute_process(COMMAND "${EXE}" ${args} --json --reference --origin ${origin} --out "${OUT}"
+                    RESULT_VARIABLE result OUTPUT_VARIABLE json ERROR_VARIABLE err)
+    if(NOT result EQUAL 0)
+        message(FATAL_ERROR "soft_shadows ${args} --origin ${origin} failed (${result}): ${err}\n${json}")
+    endif()
+    string(JSON mode GET "${json}" mode)
+    if(mode STREQUAL "hard")
+        string(JSON mismatched GET "${json}" reference mismatched)
+        string(JSON tested GET "${json}" hard tested)
+        string(JSON shadowed GET "${json}" hard shadowed)
+        math(EXPR lit "${tested} - ${shadowed}")
+        math(EXPR ppm "1000000 * ${lit} / ${tested}")  # lit fraction, parts per million
+    else()
+        string(JSON mismatched GET "${json}" reference mismatched_bits)
+        string(JSON mean GET "${json}" mean_visible_fraction)
+        # parts per million (truncated) from the decimal text
+        string(REGEX REPLACE "^([01])\\.([0-9]*)$" "\\1;\\2" parts "${mean}")
+        list(GET parts 0 whole)
+        list(GET parts 1 digits)
+        string(APPEND digits "000000")
+        string(SUBSTRING "${digits}" 0 6 digits)
+        string(REGEX REPLACE "^0+([0-9])" "\\1" digits "${digits}")
+        math(EXPR ppm "${whole} * 1000000 + ${digits}")
+    endif()
+    if(NOT mismatched EQUAL 0)
+        message(FATAL_ERROR "--origin ${origin}: ${mismatched} mismatched against the oracle\n${json}")
+    endif()
+    list(APPEND means ${ppm})
+    message("--origin ${origin}: mean visible ${ppm} ppm, 0 mismatched")
+endforeach()
+list(GET means 0 at_zero)
+list(GET means 1 far)
+math(EXPR diff "${far} - ${at_zero}")
+if(diff LESS 0)
+    math(EXPR diff "-${diff}")
+endif()
+if(diff GREATER TOLERANCE_PPM)
+    message(FATAL_ERROR "--origin ${ORIGIN}: mean visible fraction moved by ${diff} ppm (> ${TOLERANCE_PPM}) from --origin 0")
+endif()
+message("ok: --origin ${ORIGIN} within ${diff} ppm of --origin 0")
