@@ -145,7 +145,10 @@ struct SoftSkips {
     /// centre's verdict, and the casters that block the centre are exactly those needed. Needs every
     /// receiver in front of the influence setup's far plane by 2^-12 of the far plane's distance
     /// from the light (edges crossing it are clipped that far in front of it; the demo's plane lies
-    /// 1 % beyond the farthest receiver). Counted: pairs_hard.
+    /// 1 % beyond the farthest receiver). The oracle's coplanar rule opens edges that are no
+    /// silhouettes (a triangle it ignores for p next to one it counts: detail::soft::coplanarOpen),
+    /// so a second draw marks the texels of view samples where it may (each triangle's region).
+    /// Counted: pairs_hard.
     bool silhouettes = false;
     /// A (receiver p, caster T) pair is skipped before anything else when p lies beyond one of T's
     /// wedge planes (detail::soft::wedgePlanes: the three planes through T's edges tangent to a
@@ -424,6 +427,40 @@ inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double re
     const double side = oracle::dot3(c.normal, to_p);
     const double clearance = (std::fabs(side) / c.normal_length - c.error_per_unit * oracle::length3(to_p)) * (1.0 - 1e-9);
     return clearance > reach && (side > 0.0) == (c.light_side > 0.0);
+}
+
+/// SoftSkips::silhouettes' second condition (silhouettes.frag.glsl's near pass computes the same,
+/// step for step): true when the oracle's coplanar rule may ignore T for some light sample of p
+/// (p or the sample within coplanar_epsilon * scale of T) while a segment from p to the light could
+/// cross T's plane where another triangle is counted: T's edges are then open for p, and p's light
+/// need not be all-or-nothing outside every silhouette's region (a grazing light over a floor
+/// made of two triangles: the crossing walks from the ignored one over the diagonal into the
+/// counted one). False needs the whole light strictly on one side of T's plane and p strictly on
+/// that side too (no segment meets the plane) or so close to the plane that every segment meets
+/// it within epsilon * s_min of p, where every triangle is ignored for every light sample
+/// (s_min <= |l - p|_inf for each light point l). scale_v: max |v_i - p|_inf; distance2: p to T,
+/// light_distance2: the light's centre to T, both squared.
+inline bool coplanarOpen(const CasterPlane& c, const glm::dvec3& p, double scale_v, double distance2, double light_distance2,
+                         const glm::dvec3& centre, double light_reach, double epsilon) {
+    const glm::dvec3 to_centre = centre - p;
+    const double centre_reach = std::max(std::fabs(to_centre.x), std::max(std::fabs(to_centre.y), std::fabs(to_centre.z)));
+    const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
+    const double reach = epsilon * std::max(scale_v, s_max);
+    const double light_near = reach + light_reach;
+    const bool p_near = !(distance2 > reach * reach * (1.0 + 1e-9));
+    const bool light_near_t = !(light_distance2 > light_near * light_near * (1.0 + 1e-9));
+    if (!p_near && !light_near_t) return false;  // T is counted for every light sample
+    if (light_near_t || !(c.normal_length > 0.0) || !(c.light_clearance > 0.0)) return true;
+    const glm::dvec3 to_p = p - c.v0;
+    const double side = oracle::dot3(c.normal, to_p);
+    const double error = c.error_per_unit * oracle::length3(to_p);
+    const double distance = std::fabs(side) / c.normal_length;
+    if ((side > 0.0) == (c.light_side > 0.0) && (distance - error) * (1.0 - 1e-9) > 0.0) return false;  // p on the light's side
+    // The segment to a light point l meets the plane d |l - p| / (d + h) <= d |l - p| / clearance from p.
+    const double d_hi = (distance + error) * (1.0 + 1e-9);
+    const double length_hi = (oracle::length3(to_centre) + light_reach) * (1.0 + 1e-9);
+    const double r_min = epsilon * s_min * (1.0 - 1e-6);
+    return !(d_hi * length_hi < r_min * c.light_clearance);
 }
 
 /// SoftSkips::wedges: up to four planes F(x) = n . x + d per caster T (float n, d: what the

@@ -12,7 +12,8 @@
 //             edge with unfused float arithmetic that other compilers may contract; the clip
 //             widens each kept end by 2^-12 of the edge, so such differences move a region by
 //             far less than a pixel and the tolerance covers them.
-//   compare:  SampleBasedSoftShadows::readMarks() — every texel outside `uncertain` agrees.
+//   compare:  bit 0 of SampleBasedSoftShadows::readMarks() (bit 1 marks texels near a coplanar
+//             neighbour, SoftSkips::silhouettes) — every texel outside `uncertain` agrees.
 #ifndef PENUMBRA_PIPELINES_SILHOUETTE_MARKS_HPP
 #define PENUMBRA_PIPELINES_SILHOUETTE_MARKS_HPP
 

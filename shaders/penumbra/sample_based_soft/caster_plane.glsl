@@ -70,4 +70,35 @@ bool penumbraSbsCasterPlaneCuts(PenumbraSbsCasterPlane c, dvec3 p, double reach)
     return clearance > reach && (side > 0.0LF) == (c.light_side > 0.0LF);
 }
 
+// SoftSkips::silhouettes, the coplanar rule's open edges (detail::soft::coplanarOpen, step for
+// step; docs/design.md, Silhouettes): true when the oracle may ignore T for some light sample of
+// p's (rule 2: p, or the sample, within coplanar_epsilon * scale of T) while a segment from p to
+// the light could cross T's plane where another triangle is counted. distance2: p to T squared;
+// light_distance2: the light's centre to T squared. False needs the whole light strictly on one
+// side of T's plane and p either strictly on that side too (no segment meets the plane) or so
+// close to it that every segment meets the plane within epsilon * s_min of p (s_min <= |l - p|_inf
+// for every light point l), where every triangle is ignored for every sample.
+bool penumbraSbsCoplanarOpen(PenumbraSbsCasterPlane c, dvec3 p, double scale_v, double distance2, double light_distance2,
+                             dvec3 centre, double light_reach, double epsilon) {
+    const double centre_reach = penumbraSbsMaxAbs(centre - p);
+    const double s_min = max(0.0LF, centre_reach - light_reach), s_max = centre_reach + light_reach;
+    precise double reach = epsilon * max(scale_v, s_max);
+    precise double light_near = reach + light_reach;
+    const bool p_near = !(distance2 > reach * reach * (1.0LF + 1e-9LF));
+    const bool light_near_t = !(light_distance2 > light_near * light_near * (1.0LF + 1e-9LF));
+    if (!p_near && !light_near_t) return false;  // T is counted for every light sample
+    if (light_near_t || !(c.normal_length > 0.0LF) || !(c.light_clearance > 0.0LF)) return true;
+    const dvec3 to_p = p - c.v0;
+    const double side = penumbraSbsDot(c.normal, to_p);
+    precise double error = c.error_per_unit * penumbraSbsLength(to_p);
+    precise double distance = abs(side) / c.normal_length;
+    precise double clearance = (distance - error) * (1.0LF - 1e-9LF);
+    if ((side > 0.0LF) == (c.light_side > 0.0LF) && clearance > 0.0LF) return false;  // p on the light's side
+    // The segment to a light point l meets the plane at d |l - p| / (d + h) <= d |l - p| / clearance from p.
+    precise double d_hi = (distance + error) * (1.0LF + 1e-9LF);
+    precise double length_hi = (penumbraSbsLength(centre - p) + light_reach) * (1.0LF + 1e-9LF);
+    precise double r_min = epsilon * s_min * (1.0LF - 1e-6LF);
+    return !(d_hi * length_hi < r_min * c.light_clearance);
+}
+
 #endif

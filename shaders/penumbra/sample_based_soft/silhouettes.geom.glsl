@@ -12,7 +12,13 @@
 // segment to some light point through that edge could start from lands in a marked texel
 // (silhouettes.frag.glsl). An edge is emitted by one of its two triangles (the one whose apex is
 // lexicographically smaller; both when the apexes coincide or the edge is open).
-// Defines: the influence setup's, with PENUMBRA_INFLUENCE_CUT forced to 0 (the cut is a triangle's).
+// With PENUMBRA_SBS_NEAR_PASS = 1 the same input emits each triangle's own (uncut) influence
+// region instead, its vertices flat to silhouettes.frag.glsl, which marks the texels holding a
+// view sample for which the oracle's coplanar rule opens T's edges (penumbraSbsCoplanarOpen).
+// Defines: the influence setup's, with PENUMBRA_INFLUENCE_CUT forced to 0 (the cut is a triangle's);
+// PENUMBRA_SBS_NEAR_PASS.
+// penumbra-permutation: PENUMBRA_SBS_NEAR_PASS=0
+// penumbra-permutation: PENUMBRA_SBS_NEAR_PASS=1
 #include "penumbra/influence_region/influence_region_shared.h"
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 #include "penumbra/sample_based_soft/caster_plane.glsl"
@@ -20,9 +26,19 @@
 #ifndef PENUMBRA_INFLUENCE_SIDES
 #define PENUMBRA_INFLUENCE_SIDES PENUMBRA_INFLUENCE_DEFAULT_SIDES
 #endif
+#ifndef PENUMBRA_SBS_NEAR_PASS
+#define PENUMBRA_SBS_NEAR_PASS 0
+#endif
 
 layout(triangles_adjacency) in;
+#if PENUMBRA_SBS_NEAR_PASS
+layout(triangle_strip, max_vertices = PENUMBRA_INFLUENCE_MAX_VERTICES(PENUMBRA_INFLUENCE_SIDES)) out;
+layout(location = 0) flat out vec3 penumbraSbsNearVertex0;
+layout(location = 1) flat out vec3 penumbraSbsNearVertex1;
+layout(location = 2) flat out vec3 penumbraSbsNearVertex2;
+#else
 layout(triangle_strip, max_vertices = 3 * PENUMBRA_INFLUENCE_MAX_VERTICES(PENUMBRA_INFLUENCE_SIDES)) out;
+#endif
 
 layout(std140, binding = PENUMBRA_SBS_PARAMS_BINDING) uniform PenumbraSbsParamsBlock {
     PenumbraSbsParams penumbraSbsParams;
@@ -98,7 +114,23 @@ void penumbraSbsEdge(vec3 x, vec3 y, vec3 z, vec3 n) {
 void main() {
     const vec3 v[6] = vec3[6](gl_in[0].gl_Position.xyz, gl_in[1].gl_Position.xyz, gl_in[2].gl_Position.xyz,
                               gl_in[3].gl_Position.xyz, gl_in[4].gl_Position.xyz, gl_in[5].gl_Position.xyz);
+#if PENUMBRA_SBS_NEAR_PASS
+    // The triangle's region holds every view sample a segment to the light meets it from: the
+    // only ones for which ignoring it can matter.
+    const int count = penumbraInfluenceRegion(v[0], v[2], v[4], penumbraSbsInfluence);
+    const vec2 half_grid = 0.5 * penumbraSbsInfluence.grid.xy;
+    for (int j = 0; j < count; ++j) {
+        const int index = (j & 1) != 0 ? (j + 1) >> 1 : (count - (j >> 1)) % count;
+        gl_Position = vec4(penumbraInfluenceOut[index] / half_grid - 1.0, 0.0, 1.0);
+        penumbraSbsNearVertex0 = v[0];
+        penumbraSbsNearVertex1 = v[2];
+        penumbraSbsNearVertex2 = v[4];
+        EmitVertex();
+    }
+    EndPrimitive();
+#else
     penumbraSbsEdge(v[0], v[2], v[4], v[1]);
     penumbraSbsEdge(v[2], v[4], v[0], v[3]);
     penumbraSbsEdge(v[4], v[0], v[2], v[5]);
+#endif
 }

@@ -52,7 +52,7 @@
 //   per frame: run() — (1) lists (count, scan, scatter; the influence setup's view-projection)
 //             + statistics, (2) a predicate pass: one point per list block inside an occlusion
 //             query, surviving when the longest list needs that block, (2b) with
-//             skips.silhouettes the silhouette pass (your DrawAdjacency once), (2c) with
+//             skips.silhouettes the silhouette pass (your DrawAdjacency twice), (2c) with
 //             skips.empty_blocks the occupancy pass: a full-screen triangle per block (under the
 //             same conditional render) increments a W x H GL_STENCIL_INDEX8 stencil where the
 //             texel's block holds samples, (3) the light pass:
@@ -384,6 +384,11 @@ public:
                                              "penumbra/sample_based_soft/silhouettes.geom.glsl",
                                              "penumbra/sample_based_soft/silhouettes.frag.glsl"},
                                             edge_defines, library);
+            edge_defines.push_back({"PENUMBRA_SBS_NEAR_PASS", "1"});
+            silhouettes_near_ = gl::buildProgram({"penumbra/sample_based_soft/light_pass.vert.glsl",
+                                                  "penumbra/sample_based_soft/silhouettes.geom.glsl",
+                                                  "penumbra/sample_based_soft/silhouettes.frag.glsl"},
+                                                 edge_defines, library);
             marks_ = gl::Buffer(size_t(options_.grid_width) * options_.grid_height * 4);
         }
         ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
@@ -520,8 +525,9 @@ public:
     /// The executor's masks / visibility of the last run (waits): sample_count * words / sample_count.
     std::vector<uint32_t> readMasks() const { return masks_.download<uint32_t>(0, size_t(setup_.sample_count) * words_); }
     std::vector<float> readVisibility() const { return visibility_.download<float>(0, setup_.sample_count); }
-    /// SoftSkips::silhouettes: the last run's texel marks (W x H, row-major; nonzero = some potential
-    /// silhouette's region covers the texel); empty when the skip is off. Waits.
+    /// SoftSkips::silhouettes: the last run's texel marks (W x H, row-major; bit 0 = some potential
+    /// silhouette's region covers the texel, bit 1 = a view sample there has a triangle's edges
+    /// opened by the oracle's coplanar rule; nonzero = full test); empty when the skip is off. Waits.
     std::vector<uint32_t> readMarks() const {
         if (!options_.skips.silhouettes) return {};
         return marks_.download<uint32_t>(0, size_t(options_.grid_width) * options_.grid_height);
@@ -551,7 +557,7 @@ private:
     glm::mat4 vp_{1.0f};
     uint32_t n_ = 0, k_ = 0, words_ = 0;
     double sample_reach_ = 0.0;  // sampleBasedSoftSampleReach of the sample table
-    gl::Program light_pass_, blocks_, resolve_, silhouettes_, occupancy_, near_stencil_, near_blocks_;
+    gl::Program light_pass_, blocks_, resolve_, silhouettes_, silhouettes_near_, occupancy_, near_stencil_, near_blocks_;
     // Deferred pairs (options.deferred_pairs > 0): the compute pass, its arguments, the fragment-stage
     // program and the list-block predicates of the redraw after an overflow.
     gl::Program light_compute_, light_coverage_, coverage_bits_, region_args_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
@@ -774,6 +780,15 @@ private:
             bindParams(0);
             gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
             gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+            (*draw_adjacency_)();
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            // ... and the texels of view samples for which the oracle's coplanar rule opens a
+            // triangle's edges (SoftSkips::silhouettes' second condition): every triangle's region.
+            silhouettes_near_.use();
+            bindParams(0);
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
             (*draw_adjacency_)();
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
