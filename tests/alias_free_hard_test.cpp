@@ -244,8 +244,9 @@ TEST_CASE("blocker test == oracle on random and adversarial pairs (outside ties)
             }
             bool tie = false;
             const bool expected = oracle.segmentBlocked(glm::dvec3(p), glm::dvec3(light), options, &tie);
+            // The oracle's E (the light lies up to ~4 triangle sizes away: past E the scales differ).
             const bool got = penumbra::afhBlocks<double>(glm::dvec3(positions[0]), glm::dvec3(positions[1]), glm::dvec3(positions[2]),
-                                                        glm::dvec3(p), glm::dvec3(light), 1e-6, 0.0);
+                                                        glm::dvec3(p), glm::dvec3(light), 1e-6, 0.0, oracle.sceneExtent());
             ++pairs;
             if (tie) {
                 ++ties;
@@ -718,7 +719,7 @@ TEST_CASE("bad input: setup throws naming the value, run() returns a Status") {
     CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("max_list_blocks 65"), penumbra::Error);
     o.max_list_blocks = 8;
     CHECK_THROWS_WITH_AS(penumbra::lightViewProjectionForBounds(glm::vec4(0.1f, 0, 0, 1), glm::vec3(-1), glm::vec3(1)),
-                         doctest::Contains("inside it"), penumbra::Error);
+                         doctest::Contains("lies inside or beside the box"), penumbra::Error);
     CHECK_THROWS_AS(penumbra::lightViewProjectionForBounds(glm::vec4(NAN, 0, 0, 1), glm::vec3(-1), glm::vec3(1)),
                     penumbra::Error);
     penumbra::AliasFreeHardShadows pipeline(o);
@@ -964,4 +965,158 @@ TEST_CASE("Fixed-6 two-pass: spill overflow is reported; lost triangles only rem
     CHECK(multi.states == multi_exact.states);
     const Comparison c = compareWithOracle(f, f.positions, light, multi.states, o.coplanar_epsilon, 0.0f);
     CHECK(c.mismatched == 0);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Far lights (issue 41 item 3): the coplanar rule's scale takes the light's distance capped at the
+// scene's extent E (AliasFreeHardOptions::scene_extent = the oracle's sceneExtent()), as the oracle.
+
+TEST_CASE("far lights: afhBlocks with the oracle's E == the oracle on random far lights (outside ties)") {
+    // Receivers 0.005-0.05 behind a random triangle, lights 1e4 and 1e5 away on the other side:
+    // eps * |l - p| (1e-5 * 1e4 = 0.1) exceeds their distance to the caster, so the uncapped scale
+    // ignores the caster; capped at E (~2) every one is decided by the geometry. Beyond ~1e6 the
+    // edge functions through the light, det(a - l, b - l, p - l), lose the sign in double.
+    std::mt19937 rng(testSeed());
+    std::uniform_real_distribution<double> u(-1.0, 1.0), h(0.005, 0.05);
+    size_t pairs = 0, ties = 0, mismatched = 0, blocked = 0, blocked_uncapped = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const std::vector<glm::vec3> positions = {glm::vec3(u(rng), u(rng), u(rng)), glm::vec3(u(rng), u(rng), u(rng)),
+                                                  glm::vec3(u(rng), u(rng), u(rng))};
+        const glm::dvec3 a(positions[0]), b(positions[1]), c(positions[2]);
+        const glm::dvec3 n = glm::cross(b - a, c - a);
+        if (glm::length(n) < 0.2) continue;  // well-shaped: the receivers' depth below it is what matters
+        const glm::dvec3 unit = glm::normalize(n);
+        const penumbra::reference::VisibilityOracle oracle(positions, std::vector<uint32_t>{0, 1, 2});
+        penumbra::reference::VisibilityOptions options;
+        options.coplanar_epsilon = 1e-5;
+        const double extent = oracle.sceneExtent();
+        for (double distance : {1e4, 1e5}) {
+            glm::dvec3 dir(u(rng), u(rng), u(rng));
+            dir = glm::normalize(dir + 1.5 * unit);  // the light on the triangle's positive side
+            const glm::dvec3 centroid = (a + b + c) / 3.0;
+            const glm::dvec3 light(glm::vec3(centroid + distance * dir));  // float, as the GPU's
+            for (int k = 0; k < 25; ++k) {
+                const double s = std::abs(u(rng)), t = std::abs(u(rng)) * (1.0 - s);
+                const glm::dvec3 on = a + s * (b - a) + t * (c - a);
+                const glm::dvec3 p(glm::vec3(on - h(rng) * dir + 0.01 * glm::dvec3(u(rng), u(rng), u(rng))));
+                bool tie = false;
+                const bool expected = oracle.segmentBlocked(p, light, options, &tie);
+                const bool got = penumbra::afhBlocks<double>(a, b, c, p, light, 1e-5, 0.0, extent);
+                ++pairs;
+                if (tie) {
+                    ++ties;
+                    continue;
+                }
+                blocked += expected;
+                blocked_uncapped += penumbra::afhBlocks<double>(a, b, c, p, light, 1e-5, 0.0);
+                if (got != expected && ++mismatched <= 5)
+                    MESSAGE("mismatch at trial ", trial, " distance ", distance, " k ", k, ": oracle ", expected, " test ", got);
+            }
+        }
+    }
+    MESSAGE(pairs, " pairs, ", blocked, " blocked (uncapped rule: ", blocked_uncapped, "), ", ties, " ties, ", mismatched,
+            " mismatched");
+    CHECK(blocked > pairs / 4);
+    CHECK(blocked_uncapped < blocked / 10);  // the old rule: the casters ignored
+    CHECK(mismatched == 0);
+}
+
+namespace {
+
+/// A floor y = 0 over [-2, 2]^2 (16 x 16 cells) and an occluder rectangle [-0.5, 0.5] x
+/// [-0.25, 0.25] (x, z) at height y = h, facing up; the camera looks down at both.
+penumbra::scene::Scene floorAndOccluder(float h) {
+    penumbra::scene::Scene scene;
+    scene.name = "floor_and_occluder";
+    scene.meshes.push_back(penumbra::scene::groundPlane(2.0f, 0.0f, 16));
+    penumbra::scene::Mesh quad;
+    quad.name = "occluder";
+    quad.positions = {{-0.5f, h, -0.25f}, {-0.5f, h, 0.25f}, {0.5f, h, 0.25f}, {0.5f, h, -0.25f}};
+    quad.normals.assign(4, glm::vec3(0, 1, 0));
+    quad.indices = {0, 1, 2, 0, 2, 3};
+    scene.meshes.push_back(std::move(quad));
+    scene.camera.eye = glm::vec3(0.0f, 3.0f, 2.0f);
+    scene.camera.target = glm::vec3(0.0f);
+    return scene;
+}
+
+}  // namespace
+
+TEST_CASE("far lights: GPU == CPU twin == oracle with scene_extent = the oracle's E, shadows of the closed form") {
+    context();
+    // The depth input's epsilon (the demo's): the uncapped reach eps * |l - p| is 2 at 1e5 and 20 at
+    // 1e6, the scene's extent 4; capped, 8e-5. The occluder is high, so most of its shadow is in view.
+    const float h = 1.5f;
+    Fixture f(floorAndOccluder(h), 96, 72);
+    const penumbra::reference::VisibilityOracle oracle(f.gpu->positions(), f.gpu->indices());
+    const glm::dvec3 u = glm::normalize(glm::dvec3(0.3, 1.0, -0.2));
+    for (double distance : {1e5, 1e6}) {
+        CAPTURE(distance);
+        const auto light = pointLight(f, glm::vec3(distance * u));
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 96;
+        o.grid_height = 72;
+        o.coplanar_epsilon = kDepthCoplanarEpsilon;
+        o.scene_extent = oracle.sceneExtent();
+        penumbra::AliasFreeHardShadows pipeline(o);
+        const auto states = runPipeline(pipeline, f, light, ViewSamples::Exact);
+        penumbra::SampleListsLight fitted = light;
+        fitted.view_projection = pipeline.readFrame().light_view_projection;
+        const auto cpu = penumbra::aliasFreeHardCpu(o, fitted, f.positions.data(), f.normals.data(), f.samples(), f.casters());
+        PENUMBRA_CHECK_BITWISE("far light: hard pipeline states GPU == CPU twin", states == cpu);
+        const Comparison c = compareWithOracle(f, f.positions, light, states, o.coplanar_epsilon, 0.0f);
+        // The closed form, in long double: p -> l crosses y = h inside the rectangle at 0 < t < 1.
+        using L = long double;
+        const glm::dvec3 l(glm::vec3(light.light));
+        size_t decided = 0, near_edge = 0, expected_shadowed = 0, wrong = 0, gpu_shadowed = 0;
+        for (uint32_t i = 0; i < f.samples(); ++i) {
+            if (states[i] != PENUMBRA_AFH_LIT && states[i] != PENUMBRA_AFH_SHADOWED) continue;
+            const glm::dvec3 p(glm::vec3(f.positions[i]));
+            const L t = (L(h) - L(p.y)) / (L(l.y) - L(p.y));
+            const L x = L(p.x) + t * (L(l.x) - L(p.x)), z = L(p.z) + t * (L(l.z) - L(p.z));
+            if (std::min(std::fabs(std::fabs(x) - 0.5L), std::fabs(std::fabs(z) - 0.25L)) < 1e-6L) {
+                ++near_edge;
+                continue;
+            }
+            const bool expected = t > 0 && t < 1 && std::fabs(x) < 0.5L && std::fabs(z) < 0.25L;
+            ++decided;
+            expected_shadowed += expected;
+            gpu_shadowed += states[i] == PENUMBRA_AFH_SHADOWED;
+            wrong += expected != (states[i] == PENUMBRA_AFH_SHADOWED);
+        }
+        // The uncapped rule (the default E = +inf) on the same frame: the occluder is ignored.
+        penumbra::AliasFreeHardOptions uncapped = o;
+        uncapped.scene_extent = std::numeric_limits<double>::infinity();
+        const auto old_states = penumbra::aliasFreeHardCpu(uncapped, fitted, f.positions.data(), f.normals.data(), f.samples(),
+                                                           f.casters());
+        const size_t old_shadowed = size_t(std::count(old_states.begin(), old_states.end(), PENUMBRA_AFH_SHADOWED));
+        MESSAGE("light at ", distance, " (E = ", oracle.sceneExtent(), "): ", c.tested, " samples, GPU ", gpu_shadowed,
+                " shadowed, closed form ", expected_shadowed, " of ", decided, " (", near_edge, " within 1e-6 of the edge), ",
+                wrong, " wrong; oracle mismatched ", c.mismatched, ", ties ", c.ties, "; uncapped rule: ", old_shadowed,
+                " shadowed");
+        CHECK(expected_shadowed > 100);
+        CHECK(gpu_shadowed == expected_shadowed);
+        CHECK(wrong == 0);
+        CHECK(c.mismatched == 0);
+        CHECK(c.untested == 0);
+        CHECK(old_shadowed < expected_shadowed / 10);  // what E fixes
+    }
+}
+
+TEST_CASE("far lights: scene_extent is validated, naming the value") {
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = o.grid_height = 16;
+    const glm::vec4 light(0, 2, 0, 1);
+    for (double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+        o.scene_extent = bad;
+        const std::string message = penumbra::test::errorOf([&] { penumbra::validateAliasFreeHardOptions(o, light); });
+        CAPTURE(message);
+        CHECK(penumbra::test::contains(message, "scene_extent"));
+        CHECK(penumbra::test::contains(message, bad == 0.0 ? "0" : bad < 0 ? "-1" : "nan"));
+    }
+    o.scene_extent = std::numeric_limits<double>::infinity();
+    CHECK_NOTHROW(penumbra::validateAliasFreeHardOptions(o, light));
+    o.scene_extent = 3.5;
+    CHECK_NOTHROW(penumbra::validateAliasFreeHardOptions(o, light));
+    CHECK(penumbra::afhParams(o, light, 0, 0u).exact.y == 3.5);  // the light pass reads E here
 }

@@ -22,6 +22,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -35,6 +36,7 @@ struct Case {
     glm::vec4 light;  // w = 1 point, w = 0 directional (unit xyz)
     float reach = 0;
     double eps = 1e-7, offset = 0;
+    double extent = std::numeric_limits<double>::infinity();  // E of the coplanar scale (+inf: uncapped)
 };
 
 enum Kind {
@@ -175,8 +177,8 @@ struct Generator {
 };
 
 bool exactTest(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& p, const glm::dvec3& l,
-               double eps, double offset) {
-    return penumbra::afhBlocks<double>(a, b, c, p, l, eps, offset);
+               double eps, double offset, double extent) {
+    return penumbra::afhBlocks<double>(a, b, c, p, l, eps, offset, extent);
 }
 
 int sign(double x) { return x > 0 ? 1 : (x < 0 ? -1 : 0); }
@@ -217,11 +219,11 @@ void check(const Case& k, Kind kind, bool exact, Tally& tally) {
     float l_error;
     penumbra::detail::blockerFilterLightPoint(k.p, k.light, k.reach, lf, l_error);
     penumbra::detail::BlockerFilterTrace t;
-    const BlockerFilterState state = penumbra::detail::blockerFilter(k.a, k.b, k.c, k.p, lf, l_error, k.eps, k.offset, &t);
+    const BlockerFilterState state = penumbra::detail::blockerFilter(k.a, k.b, k.c, k.p, lf, l_error, k.eps, k.offset, k.extent, &t);
     const bool point_light = k.light.w != 0.0f;
     const glm::dvec3 a(k.a), b(k.b), c(k.c), p(k.p);
     const glm::dvec3 l = penumbra::detail::blockerLightPoint(p, glm::dvec3(glm::vec3(k.light)), double(k.reach), point_light);
-    const bool expected = exactTest(a, b, c, p, l, k.eps, k.offset);
+    const bool expected = exactTest(a, b, c, p, l, k.eps, k.offset, k.extent);
     ++tally.cases[kind];
     if (state == BlockerFilterState::Uncertain) {
         ++tally.uncertain[kind];
@@ -233,7 +235,8 @@ void check(const Case& k, Kind kind, bool exact, Tally& tally) {
         if (++tally.verdict_mismatch <= 5)
             MESSAGE("verdict mismatch (", std::string(kKindNames[kind]), "): filter ", int(state), " double ", expected);
     }
-    const bool filtered = penumbra::detail::blockerFiltered(k.a, k.b, k.c, k.p, k.light, k.reach, k.eps, k.offset, exactTest);
+    const bool filtered = penumbra::detail::blockerFiltered(k.a, k.b, k.c, k.p, k.light, k.reach, k.eps, k.offset, k.extent,
+                                                            exactTest);
     tally.filtered_mismatch += filtered != expected;
 
     // The double values the fp64 path compares (afhBlocks<double>, same operations).
@@ -253,7 +256,8 @@ void check(const Case& k, Kind kind, bool exact, Tally& tally) {
     if (t.coplanar_certified || t.offset_certified) {
         const double nn = nx * nx + ny * ny + nz * nz;
         const double scale = std::max(std::max(penumbra::detail::afhMaxAbs<double>(a - p), penumbra::detail::afhMaxAbs<double>(b - p)),
-                                      std::max(penumbra::detail::afhMaxAbs<double>(c - p), penumbra::detail::afhMaxAbs<double>(l - p)));
+                                      std::max(penumbra::detail::afhMaxAbs<double>(c - p),
+                                               std::min(penumbra::detail::afhMaxAbs<double>(l - p), k.extent)));
         const double tol = k.eps * scale, threshold = tol * tol * nn;
         if (t.coplanar_certified) tally.coplanar_mismatch += !(dp * dp > threshold && dl * dl > threshold);
         if (t.offset_certified) tally.offset_mismatch += (dp * dp <= k.offset * k.offset * nn) != (t.offset_certified < 0);
@@ -355,6 +359,45 @@ TEST_CASE("filter certificates equal the double test (and exact signs) on 10^6 a
             ", largest |double - exact| / bound ", tally.used_double, " (their sum must stay below 1)");
     CHECK(tally.used_float + tally.used_double < 1.0);
     CHECK(tally.total() >= 1000000);
+    CHECK(tally.verdict_mismatch == 0);
+    CHECK(tally.filtered_mismatch == 0);
+    CHECK(tally.double_sign_mismatch == 0);
+    CHECK(tally.exact_sign_mismatch == 0);
+    CHECK(tally.coplanar_mismatch == 0);
+    CHECK(tally.offset_mismatch == 0);
+}
+
+TEST_CASE("filter certificates equal the double test with a capped scene extent E (far lights, issue 41)") {
+    // The coplanar certificate takes min(|l - p| + l_error, fl(min(E, 1e38)) + 1e-36) for the
+    // segment's term: an upper bound of the double test's min(|l - p|, E) for every E > 0, tiny or
+    // huge. Lights moved 1e3-1e6 further out along their direction, E from 1e-30 to +inf.
+    Generator gen(penumbra::test::testSeed() + 41);
+    Tally tally;
+    static const double kExtents[] = {1e-30, 1e-3, 0.5, 1.0, 2.0, 1e6, 1e38, 1e300, std::numeric_limits<double>::infinity()};
+    static const float kFar[] = {1.0f, 1e3f, 1e4f, 1e6f};
+    uint64_t coplanar_certified_capped = 0;
+    for (int kind = 0; kind < kKinds; ++kind) {
+        for (uint64_t i = 0; i < 20000; ++i) {
+            Case k = gen.make(Kind(kind));
+            const float far = kFar[gen.pick(4)];
+            if (k.light.w != 0.0f) k.light = glm::vec4(k.a + far * (glm::vec3(k.light) - k.a), 1.0f);
+            else k.reach *= far;
+            const double tri = std::max(penumbra::detail::afhMaxAbs<double>(glm::dvec3(k.b) - glm::dvec3(k.a)),
+                                        penumbra::detail::afhMaxAbs<double>(glm::dvec3(k.c) - glm::dvec3(k.a)));
+            k.extent = gen.pick(3) == 0 ? tri * double(gen.uni(0.5f, 4.0f)) : kExtents[gen.pick(9)];
+            if (!(k.extent > 0)) k.extent = 1e-30;  // a degenerate triangle's zero size
+            penumbra::detail::BlockerFilterTrace t;
+            glm::vec3 lf;
+            float l_error;
+            penumbra::detail::blockerFilterLightPoint(k.p, k.light, k.reach, lf, l_error);
+            penumbra::detail::blockerFilter(k.a, k.b, k.c, k.p, lf, l_error, k.eps, k.offset, k.extent, &t);
+            coplanar_certified_capped += t.coplanar_certified && k.extent < 1e38;
+            check(k, Kind(kind), i % 16 == 0, tally);
+        }
+    }
+    report(tally, "far lights, capped E");
+    MESSAGE(tally.total(), " cases, ", coplanar_certified_capped, " coplanar certificates under a finite E");
+    CHECK(coplanar_certified_capped > 1000);  // the capped certificate is exercised
     CHECK(tally.verdict_mismatch == 0);
     CHECK(tally.filtered_mismatch == 0);
     CHECK(tally.double_sign_mismatch == 0);
@@ -470,7 +513,7 @@ TEST_CASE("GPU: filtered GLSL == fp64-only GLSL on the same inputs; GPU filter s
             const bool cpu_fp64 = exactTest(glm::dvec3(k.a), glm::dvec3(k.b), glm::dvec3(k.c), glm::dvec3(k.p),
                                             penumbra::detail::blockerLightPoint(glm::dvec3(k.p), glm::dvec3(glm::vec3(k.light)),
                                                                                 double(k.reach), k.light.w != 0.0f),
-                                            k.eps, k.offset);
+                                            k.eps, k.offset, k.extent);
             cpu_mismatched += cpu_fp64 != fp64;
         }
     }

@@ -1080,3 +1080,60 @@ TEST_CASE("speed: penumbra casting vs VisibilityOracle::evaluate, torus knot, pr
             result.stats.hard_volumes_built, ", masks peak ", result.stats.mask_bytes_peak, " of ", result.stats.mask_bytes_full, " bytes, rebuilds ",
             result.stats.rebuilds, ", ties ", t.ties);
 }
+
+TEST_CASE("far lights: with scene_extent = the oracle's E, the oracle's bits at 1e4 .. 1e9 (issue 41)") {
+    // A floor y = 0 over [-2, 2]^2 (8 x 8 cells) and an occluder quad [-0.5, 0.5] x [-0.25, 0.25]
+    // at y = 0.5; a sphere light of fixed angular size (radius 0.02 D) D away along u. The oracle
+    // caps the segment's length in its tolerances at the scene's extent E = 4; the caster passes
+    // classifySegment the same E, so its bits are the oracle's and the shadow stays. Uncapped
+    // (the default), the coplanar reach 1e-7 |s - p| exceeds 0.5 past 5e6: no shadow at 1e9.
+    Mesh mesh;
+    const auto quad = [&](double x0, double x1, double z0, double z1, double y) {
+        const uint32_t base = uint32_t(mesh.positions.size());
+        mesh.positions.insert(mesh.positions.end(), {dvec3(x0, y, z0), dvec3(x0, y, z1), dvec3(x1, y, z1), dvec3(x1, y, z0)});
+        mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    };
+    for (int i = 0; i < 8; ++i)
+        for (int j = 0; j < 8; ++j) quad(-2.0 + 0.5 * i, -1.5 + 0.5 * i, -2.0 + 0.5 * j, -1.5 + 0.5 * j, 0.0);
+    quad(-0.5, 0.5, -0.25, 0.25, 0.5);
+    const penumbra::reference::VisibilityOracle oracle(mesh.positions, mesh.indices);
+    REQUIRE(oracle.sceneExtent() == 4.0);
+    std::vector<dvec3> receivers;
+    for (double y : {0.0, 1e-3, 0.2})
+        for (int i = 0; i < 20; ++i)
+            for (int j = 0; j < 20; ++j) receivers.push_back(dvec3(-1.9 + 0.19 * i + 0.0071, y, -1.9 + 0.19 * j + 0.0037));
+    const dvec3 u = glm::normalize(dvec3(0.3, 1.0, -0.2));
+    for (double distance : {1e4, 1e6, 1e9}) {
+        CAPTURE(distance);
+        penumbra::Light light;
+        light.center = distance * u;
+        light.size = dvec3(0.02 * distance);
+        const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {64, 2});
+        penumbra::PenumbraCastingOptions options;
+        options.scene_extent = oracle.sceneExtent();
+        const penumbra::PenumbraCastingResult result = cast(mesh, receivers, light, sets, options);
+        const Tally t = compare(result, oracleTruth(oracle, receivers, result.receiver_sets, sets));
+        penumbra::PenumbraCastingOptions uncapped;
+        const Tally old = compare(cast(mesh, receivers, light, sets, uncapped),
+                                  oracleTruth(oracle, receivers, result.receiver_sets, sets));
+        MESSAGE("D = ", distance, ": ", t.pairs, " pairs, ", t.blocked, " blocked, ", t.ties, " ties, mismatched ",
+                t.mismatched, ", tie mismatched ", t.tie_mismatched, "; uncapped: mismatched ", old.mismatched,
+                "; certified ", result.stats.pairs_certified, ", classified ", result.stats.pairs_classified);
+        CHECK(t.blocked > t.pairs / 50);
+        CHECK(t.mismatched == 0);
+        CHECK(t.tie_mismatched == 0);
+        if (distance >= 1e9) CHECK(old.mismatched > 0);  // what E fixes
+    }
+    penumbra::Light light;
+    light.center = dvec3(0, 5, 0);
+    light.size = dvec3(0.1);
+    const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, {32, 1});
+    for (double bad : {0.0, -2.0, std::numeric_limits<double>::quiet_NaN()}) {
+        penumbra::PenumbraCastingOptions options;
+        options.scene_extent = bad;
+        const std::string message = errorOf([&] { penumbra::PenumbraCaster(receivers, light, sets, options); });
+        CAPTURE(message);
+        CHECK(contains(message, "scene_extent"));
+        CHECK(contains(message, bad == 0.0 ? "got 0" : bad < 0 ? "got -2" : "got nan"));
+    }
+}

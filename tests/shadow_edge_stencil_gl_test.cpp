@@ -12,9 +12,12 @@
 
 #include "support/gl_test_support.hpp"
 
+#include "penumbra/reference/visibility.hpp"
+
 #include <doctest/doctest.h>
 
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -62,7 +65,8 @@ size_t countDiffering(const std::vector<uint32_t>& a, const std::vector<uint32_t
     return n;
 }
 
-void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4& light_vector, uint32_t samples, float reach) {
+void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4& light_vector, uint32_t samples, float reach,
+              double coplanar_epsilon = 1e-7, double scene_extent = std::numeric_limits<double>::infinity()) {
     penumbra::test::context();
     Frame f(std::move(scene), 64, 48);
     penumbra::AaPatternOptions pattern;
@@ -77,6 +81,8 @@ void runScene(const std::string& name, penumbra::scene::Scene scene, const vec4&
     o.grid_height = f.height;
     o.directional_reach = reach;
     o.max_list_blocks = 64;
+    o.coplanar_epsilon = coplanar_epsilon;
+    o.scene_extent = scene_extent;
 
     penumbra::gl::ShadowEdgeStencil stencil(f.width, f.height, o, pattern);
     REQUIRE(stencil.run(f.centreRange(), f.normalRange(), f.view, light, f.casterBuffers()) == penumbra::Status::Ok);
@@ -241,6 +247,17 @@ TEST_CASE("GPU stencil == CPU twin; edge == full through the GPU hard pipeline")
     runScene("grass 8x", penumbra::scene::grass(120), vec4(penumbra::scene::grass(120).light.position, 1.0f), 8, 0.0f);
     runScene("torus knot 16x, directional", penumbra::scene::torusKnot(24), vec4(glm::normalize(vec3(0.3f, 1.0f, 0.4f)), 0.0f),
              16, 20.0f);
+}
+
+TEST_CASE("GPU stencil, far point light with scene_extent = the oracle's E: GPU == twin, edges found (issue 41)") {
+    // A coarse epsilon 1e-3 with the light 1e3 away: uncapped, its coplanar reach (~1) swallows
+    // every caster and nothing is flagged; capped at E the knot's shadow edges are.
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const penumbra::scene::Mesh merged = scene.merged();
+    const double extent = penumbra::reference::VisibilityOracle(merged.positions, merged.indices).sceneExtent();
+    const vec3 centre = 0.5f * (scene.bounds().min + scene.bounds().max);
+    const vec3 light = centre + 1e3f * glm::normalize(scene.light.position - centre);
+    runScene("torus knot 8x, light at 1e3", scene, vec4(light, 1.0f), 8, 0.0f, 1e-3, extent);
 }
 
 TEST_CASE("GPU stencil: bad input returns a Status, setup errors throw") {

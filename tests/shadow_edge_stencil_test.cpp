@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <set>
 #include <string>
 #include <utility>
@@ -107,7 +108,8 @@ struct Outcome {
 /// Everything for one (scene, view, light): the stencils, the hard pipeline's CPU twin on the full
 /// and the edge buffers, the oracle on every point.
 Outcome runCase(const Soup& soup, const View& view, const vec4& light, const penumbra::AaPatternOptions& pattern,
-                float reach = 0.0f) {
+                float reach = 0.0f, double coplanar_epsilon = 1e-7,
+                double scene_extent = std::numeric_limits<double>::infinity()) {
     std::vector<vec4> centres, normals;
     castCentres(soup, view, centres, normals);
     const penumbra::AaFootprints f = penumbra::aaFootprintsCpu(view.lists_view(), centres.data(), normals.data(), pattern);
@@ -124,6 +126,8 @@ Outcome runCase(const Soup& soup, const View& view, const vec4& light, const pen
     o.grid_height = view.height;
     o.directional_reach = reach;
     o.max_list_blocks = 64;
+    o.coplanar_epsilon = coplanar_epsilon;
+    o.scene_extent = scene_extent;
     const penumbra::ProvableStencilCpu stencil = penumbra::provableEdgeStencilCpu(o, lists_light, f, soup.casters());
 
     // Edge two ways: unflagged pixels' centres sampled (what the Chebyshev stencil needs) and
@@ -394,6 +398,31 @@ TEST_CASE("provable stencil: random soups with slivers and ground contacts, far 
         total.flagged += o.flagged;
     }
     CHECK(total.edge_truth > 0);  // the cases do have edges
+}
+
+TEST_CASE("provable stencil: far lights with scene_extent = the oracle's E, 0 missed edge pixels (issue 41)") {
+    // The ground and an occluder quad 0.5 above it; a point light 1e5 and 1e6 away at the depth
+    // input's epsilon 2e-5: uncapped, its coplanar reach (2, 20) swallows the occluder and the
+    // stencil flags none of the edges the oracle (capped at E) sees.
+    const penumbra::scene::Scene s = penumbra::scene::columns(1);
+    Soup soup;
+    soup.add(s.meshes[0]);  // the ground only
+    penumbra::scene::Mesh quad;
+    quad.positions = {{-0.3f, 0.5f, -0.2f}, {-0.3f, 0.5f, 0.2f}, {0.3f, 0.5f, 0.2f}, {0.3f, 0.5f, -0.2f}};
+    quad.normals.assign(4, vec3(0, 1, 0));
+    quad.indices = {0, 1, 2, 0, 2, 3};
+    soup.add(quad);
+    const double extent = penumbra::reference::VisibilityOracle(soup.positions, soup.indices).sceneExtent();
+    const dvec3 u = glm::normalize(dvec3(0.3, 1.0, -0.2));
+    for (double distance : {1e5, 1e6}) {
+        CAPTURE(distance);
+        penumbra::AaPatternOptions pattern;
+        pattern.samples = 8;
+        const Outcome o = runCase(soup, sceneView(s, 40, 30), vec4(vec3(distance * u), 1.0f), pattern, 0.0f, 2e-5, extent);
+        report("far light " + std::to_string(distance), o);
+        checkSound(o);
+        CHECK(o.edge_truth > 10);
+    }
 }
 
 TEST_CASE("conservative moment map: every texel's depth is at most the depth of any caster point over it") {

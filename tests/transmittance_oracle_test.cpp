@@ -691,3 +691,82 @@ TEST_CASE("bad input throws penumbra::Error naming the value") {
 }
 
 }  // TEST_SUITE
+
+TEST_CASE("far light: the layers' closed form at 1e2 .. 1e40, the work of a near light (issue 41)") {
+    // A floor z = 0 (8 x 8 cells, opacity 1/8: receivers lie on it) and two occluders, z = 0.5
+    // (opacity 1/2) and z = 1 (1/4), partly overlapping; light points D u along a fixed u. The
+    // tolerances scale with the scene's extent E = 4, not with |q - p| (VisibilityOracle's rule):
+    // uncapped, the coplanar reach 1e-7 |q - p| swallowed both occluders past D ~ 1e7. Products
+    // are dyadic, hence exact; crossings within 1e-6 of an edge or diagonal are skipped.
+    Mesh mesh;
+    std::vector<double> opacity;
+    for (int i = 0; i < 8; ++i)
+        for (int j = 0; j < 8; ++j) {
+            mesh.layer(0.0, -2.0 + 0.5 * i, -1.5 + 0.5 * i, -2.0 + 0.5 * j, -1.5 + 0.5 * j);
+            opacity.insert(opacity.end(), {0.125, 0.125});
+        }
+    struct Occluder {
+        double z, x0, x1, y0, y1, a;
+    };
+    const Occluder occluders[2] = {{0.5, -0.5, 0.5, -0.25, 0.25, 0.5}, {1.0, -0.25, 0.75, -0.5, 0.0, 0.25}};
+    for (const Occluder& o : occluders) {
+        mesh.layer(o.z, o.x0, o.x1, o.y0, o.y1);
+        opacity.insert(opacity.end(), {o.a, o.a});
+    }
+    const TransmittanceOracle oracle(mesh.positions, mesh.indices, opacity);
+    CHECK(oracle.sceneExtent() == 4.0);
+    std::vector<dvec3> receivers;
+    for (double z : {0.0, 1e-3, 0.2})
+        for (int i = 0; i < 24; ++i)
+            for (int j = 0; j < 24; ++j) receivers.push_back({-1.9 + 0.16 * i + 0.0071, -1.9 + 0.16 * j + 0.0037, z});
+    const dvec3 u(0.3, -0.2, 1.0);
+    uint64_t near_tests = 0;
+    for (double distance : {1e2, 1e6, 1e10, 1e20, 1e40}) {
+        CAPTURE(distance);
+        const dvec3 q = distance * u;
+        std::vector<TransmittanceSegment> segments;
+        std::vector<double> expected;
+        for (const dvec3& p : receivers) {
+            using L = long double;
+            double product = 1.0;
+            bool near_edge = false;
+            for (const Occluder& o : occluders) {
+                const L t = (L(o.z) - L(p.z)) / (L(q.z) - L(p.z));
+                const L x = L(p.x) + t * (L(q.x) - L(p.x)), y = L(p.y) + t * (L(q.y) - L(p.y));
+                // The diagonal (x0, y0)-(x1, y1): (y - y0)(x1 - x0) - (x - x0)(y1 - y0), normalised.
+                const L dx = L(o.x1 - o.x0), dy = L(o.y1 - o.y0);
+                const L diagonal = std::fabs((y - L(o.y0)) * dx - (x - L(o.x0)) * dy) / std::sqrt(dx * dx + dy * dy);
+                const L margin = std::min({std::fabs(x - L(o.x0)), std::fabs(x - L(o.x1)), std::fabs(y - L(o.y0)),
+                                           std::fabs(y - L(o.y1)), diagonal});
+                near_edge |= margin < 1e-6L;
+                if (t > 0 && t < 1 && x > L(o.x0) && x < L(o.x1) && y > L(o.y0) && y < L(o.y1)) product *= 1.0 - o.a;
+            }
+            if (near_edge) continue;
+            segments.push_back({p, q});
+            expected.push_back(product);
+        }
+        const TransmittanceBatch<double> batch = oracle.evaluate(segments);
+        const TransmittanceBatch<double> brute = oracle.evaluateBruteForce(segments);
+        size_t wrong = 0, attenuated = 0, both = 0;
+        for (size_t i = 0; i < segments.size(); ++i) {
+            wrong += batch.results[i].transmittance != expected[i] || batch.results[i].tie;
+            wrong += brute.results[i].transmittance != batch.results[i].transmittance;
+            attenuated += expected[i] < 1.0;
+            both += expected[i] == 0.375;
+        }
+        MESSAGE("D = ", distance, ": ", segments.size(), " segments, ", attenuated, " attenuated (", both,
+                " by both occluders), ", wrong, " wrong, ties ", batch.tie_count, ", nodes ", batch.nodes_visited,
+                ", tests/segment ", double(batch.triangle_tests) / double(segments.size()));
+        CHECK(segments.size() > receivers.size() * 9 / 10);
+        CHECK(attenuated > 80);
+        CHECK(both > 30);
+        CHECK(wrong == 0);
+        CHECK(batch.tie_count == 0);
+        if (distance == 1e2) near_tests = batch.triangle_tests;
+        CHECK(batch.triangle_tests <= 2 * near_tests);
+        // One ray: the step function has the closed form's crossings.
+        const RayTransmittance<double> ray = oracle.transmittanceAlongRay(dvec3(0.0071, 0.0037, 0.0), u, distance);
+        CHECK_FALSE(ray.tie);
+        CHECK(ray.steps.size() == 2);
+    }
+}

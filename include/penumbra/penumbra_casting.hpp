@@ -223,6 +223,10 @@ struct PenumbraCastingOptions {
     unsigned threads = 0;                ///< 0: std::thread::hardware_concurrency()
     uint32_t batch_triangles = 65536;    ///< triangles buffered (and area-sorted) before processing
     reference::VisibilityOptions oracle; ///< tie / coplanar epsilons, as the oracle (threads ignored)
+    /// E capping the segment's length in the oracle's tolerances (> 0): VisibilityOracle::sceneExtent()
+    /// of the whole mesh streamed (the caster sees it a batch at a time, so it cannot compute it).
+    /// +inf = the uncapped rule: lights ~1 / coplanar_epsilon scene sizes away lose their shadows.
+    double scene_extent = std::numeric_limits<double>::infinity();
     std::function<bool(double fraction)> progress;  ///< optional; return false to cancel
 };
 
@@ -973,6 +977,8 @@ private:
         namespace dc = detail::casting;
         namespace oracle = detail::oracle;
         oracle::checkOptions(options_.oracle, "PenumbraCaster");
+        PENUMBRA_CHECK(options_.scene_extent > 0,  // NaN fails too; +inf is the uncapped rule
+                       "PenumbraCaster: options.scene_extent must be > 0 or +inf (got ", options_.scene_extent, ")");
         PENUMBRA_CHECK(options_.leaf_size >= 1, "PenumbraCaster: options.leaf_size must be >= 1 (got ", options_.leaf_size, ")");
         PENUMBRA_CHECK(options_.group_size >= 1, "PenumbraCaster: options.group_size must be >= 1 (got ", options_.group_size, ")");
         PENUMBRA_CHECK(options_.batch_triangles >= 1, "PenumbraCaster: options.batch_triangles must be >= 1 (got ",
@@ -1636,7 +1642,7 @@ private:
                     }
                     ++w.counters.pairs_tested;
                     const oracle::Verdict verdict =
-                        oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options_.oracle));
+                        oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options_.oracle, options_.scene_extent));
                     if (!verdict.hit && !verdict.fragile) continue;
                     record(st, i, verdict);
                     new_robust |= verdict.hit && !verdict.fragile;
@@ -1771,7 +1777,8 @@ private:
                     }
                 }
                 ++w.counters.pairs_tested;
-                const oracle::Verdict verdict = oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options_.oracle));
+                const oracle::Verdict verdict =
+                    oracle::classifySegment(rec.tri, oracle::makeSegmentQuery(p, s, options_.oracle, options_.scene_extent));
                 if (!verdict.hit && !verdict.fragile) continue;
                 record(st, i, verdict);
                 new_robust |= verdict.hit && !verdict.fragile;

@@ -461,7 +461,8 @@ inline AaShadowVolume aaShadowVolume(const glm::dvec3& a, const glm::dvec3& b, c
 inline double aaPlaneDistance(const glm::dvec4& plane, const glm::dvec3& p) { return aaDot(glm::dvec3(plane), p) + plane.w; }
 
 /// The sphere test's margin: the exact test's coplanar tolerance (eps times its scale, which
-/// these distances bound) doubled, plus 1e-9 of the scale for rounding.
+/// these distances bound, uncapped: it also bounds the scale capped at scene_extent) doubled, plus
+/// 1e-9 of the scale for rounding (planes through the light round with its distance).
 inline double aaSphereMargin(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& q, double r,
                              const glm::vec4& light, double reach, double eps) {
     const double tri = std::max(aaLength(b - a), std::max(aaLength(c - a), aaLength(c - b)));
@@ -632,7 +633,7 @@ inline ProvableStencilCpu provableEdgeStencilCpu(const AliasFreeHardOptions& opt
                     for (uint32_t k = 0; k < k_points; ++k) {
                         const glm::dvec3 p(glm::vec3(k == 0 ? f.centres[i] : subs[k - 1]));
                         const glm::dvec3 l = point ? glm::dvec3(light.light) : p + detail::mulRounded(glm::dvec3(light.light), reach);
-                        blocked[k] = afhBlocks<double>(a, b, c, p, l, eps, 0.0) ? 1 : 0;
+                        blocked[k] = afhBlocks<double>(a, b, c, p, l, eps, 0.0, options.scene_extent) ? 1 : 0;
                         count += blocked[k];
                     }
                     out.exact_tests += k_points;
@@ -991,7 +992,8 @@ inline AaParams aaParams(const SampleListsView& view, const SampleListsLight& li
         p.inverse_view_projection[c] = inverse[c];
         p.light_view_projection[c] = vp[c];
     }
-    p.numbers = glm::dvec4(options.coplanar_epsilon, double(options.directional_reach), view.depth_zero_to_one ? 0.0 : -1.0, 0.0);
+    p.numbers = glm::dvec4(options.coplanar_epsilon, double(options.directional_reach), view.depth_zero_to_one ? 0.0 : -1.0,
+                           options.scene_extent);
     p.light_clip = light.view_projection;
     p.light = light.light;
     for (uint32_t k = 0; k < pattern.samples; ++k) {

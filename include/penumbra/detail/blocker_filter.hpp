@@ -44,6 +44,9 @@
 // is most of the fallback rate: the coplanar epsilon (1e-7) sits at float noise (1.2e-7).
 // Offset (4): certified kept when |dp_f| > B + offset |n|1 (+ slack), rejected when
 // (|dp_f| + B) < offset (|n_f|inf - error) (|n|2 >= |n|inf), Uncertain in between.
+// Scene extent E (the coplanar scale caps |l - p| at E): the float scale takes
+// min(|lp_f|inf + l_error, fl(min(E, 1e38)) + 1e-36), an upper bound of the double path's up to
+// one rounding (inside the slack); 1e38 exceeds every difference the filter accepts.
 // Directional lights: l_f = fl(p + fl(light * reach)) differs from the double path's l_d by at
 // most l_error = 2.5e-7 (|t|inf + |l_f|inf) + 1e-36 per coordinate (both within 2u(1+5u) of the
 // exact point); magnitudes are grown by l_error, dl moves by at most sum(Q) l_error and e_i,
@@ -71,6 +74,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace penumbra::detail {
 
@@ -86,6 +90,7 @@ inline constexpr float kBlockerFilterNormalRel = 1.0e-6f;
 inline constexpr float kBlockerFilterLightRel = 2.5e-7f;
 inline constexpr float kBlockerFilterTiny = 1.0e-36f;
 inline constexpr float kBlockerFilterMaxDifference = 1.0e12f;
+inline constexpr double kBlockerFilterExtentClamp = 1.0e38;  // penumbraAfhFilterExtentClamp
 
 /// a * b rounded on its own: opaque to the optimiser, so it cannot be contracted with a following
 /// add into an FMA (GCC contracts across statements with -mfma / -march=native). The GLSL side
@@ -123,8 +128,10 @@ struct BlockerFilterTrace {
 
 /// penumbraAfhBlocksFilter: see the header comment. `l` is the light point in float and l_error
 /// bounds |l - l_double| per coordinate (0 for a point light: l_double = double(l)).
+/// `scene_extent`: the double test's E (+inf = uncapped).
 inline BlockerFilterState blockerFilter(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& p,
                                         const glm::vec3& l, float l_error, double coplanar_epsilon, double offset,
+                                        double scene_extent = std::numeric_limits<double>::infinity(),
                                         BlockerFilterTrace* trace = nullptr) {
     using detail::blockerFilterMul;
     BlockerFilterTrace local;
@@ -182,8 +189,10 @@ inline BlockerFilterState blockerFilter(const glm::vec3& a, const glm::vec3& b, 
     if (sp == 0 || sl == 0 || s0 == 0 || s1 == 0 || s2 == 0) return BlockerFilterState::Uncertain;
 
     const glm::vec3 bp = p - b, cp = p - c;
+    const float extent_up = static_cast<float>(std::min(scene_extent, kBlockerFilterExtentClamp)) + kBlockerFilterTiny;
+    const float segment = std::min(std::max(mlp.x, std::max(mlp.y, mlp.z)) + l_error, extent_up);
     const float scale = std::max(std::max(blockerFilterMaxAbs(ap), blockerFilterMaxAbs(bp)),
-                                 std::max(blockerFilterMaxAbs(cp), std::max(mlp.x, std::max(mlp.y, mlp.z)) + l_error));
+                                 std::max(blockerFilterMaxAbs(cp), segment));
     const float n1 = (((std::abs(nx) + std::abs(ny)) + std::abs(nz)) + mul(kBlockerFilterNormalRel, q_sum)) + abs_plane;
     const float eps_up = static_cast<float>(coplanar_epsilon) + kBlockerFilterTiny;
     const float tol_n = mul(kBlockerFilterSlack, mul(mul(eps_up, scale), n1)) + abs_plane;
@@ -229,23 +238,23 @@ inline void blockerFilterLightPoint(const glm::vec3& p, const glm::vec4& light, 
     l_error = blockerFilterMul(kBlockerFilterLightRel, blockerFilterMaxAbs(t) + blockerFilterMaxAbs(l)) + kBlockerFilterTiny;
 }
 
-/// penumbraAfhBlocksFiltered: the filter, then `exact(a, b, c, p, l_double, eps, offset)` (the
-/// double test, e.g. penumbra::afhBlocks<double>) where it is uncertain. `state` (optional)
-/// receives the filter's state.
+/// penumbraAfhBlocksFiltered: the filter, then `exact(a, b, c, p, l_double, eps, offset,
+/// scene_extent)` (the double test, e.g. penumbra::afhBlocks<double>) where it is uncertain.
+/// `state` (optional) receives the filter's state.
 template <typename ExactTest>
 bool blockerFiltered(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& p, const glm::vec4& light,
-                     float reach, double coplanar_epsilon, double offset, ExactTest&& exact,
+                     float reach, double coplanar_epsilon, double offset, double scene_extent, ExactTest&& exact,
                      BlockerFilterState* state = nullptr) {
     glm::vec3 l;
     float l_error;
     blockerFilterLightPoint(p, light, reach, l, l_error);
-    const BlockerFilterState s = blockerFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset);
+    const BlockerFilterState s = blockerFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset, scene_extent);
     if (state) *state = s;
     if (s != BlockerFilterState::Uncertain) return s == BlockerFilterState::True;
     const bool point_light = light.w != 0.0f;
     return exact(glm::dvec3(a), glm::dvec3(b), glm::dvec3(c), glm::dvec3(p),
                  blockerLightPoint(glm::dvec3(p), glm::dvec3(glm::vec3(light)), double(reach), point_light),
-                 coplanar_epsilon, offset);
+                 coplanar_epsilon, offset, scene_extent);
 }
 
 }  // namespace penumbra::detail

@@ -6,7 +6,8 @@
 // Exactness. AfhPrecision::Exact (default) runs the plane tests in double with the oracle's
 // coplanar rule (blocker_test.glsl; the epsilon reaches the GPU in double): on every (sample,
 // light) pair the oracle does not flag as a tie, the result equals
-// reference::VisibilityOracle::segmentBlocked with the same coplanar_epsilon — tests check 0
+// reference::VisibilityOracle::segmentBlocked with the same coplanar_epsilon and scene_extent =
+// the oracle's sceneExtent() (needed once the light is farther than the scene is wide) — tests check 0
 // mismatches, on the same float positions the GPU used (buffer or depth-reconstructed samples).
 // AfhPrecision::Fast uses float planes and an optional sample offset toward the light; its
 // mismatches are measured, not assumed.
@@ -74,6 +75,10 @@ struct AliasFreeHardOptions {
     /// rate on consumer GPUs; on llvmpipe it is nearly free, so there the filter costs ~25%.
     bool fp64_only = false;
     double coplanar_epsilon = 1e-7;  ///< the oracle's coplanar rule (relative); above view-sample float noise (~1 ulp)
+    /// E of the coplanar rule's scale (world units, > 0): the light's distance counts at most E, as in
+    /// the oracle; pass VisibilityOracle::sceneExtent() of the casters. +inf = the uncapped rule
+    /// (lights ~1 / coplanar_epsilon scene sizes away then lose their shadows; issue 41).
+    double scene_extent = std::numeric_limits<double>::infinity();
     float sample_offset = 0.0f;      ///< world units; see the summary (0 = exact geometry)
     float directional_reach = 0.0f;  ///< directional lights: > 0, at least the scene's extent
     bool fit_frustum = true;         ///< §4.3
@@ -286,6 +291,8 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
                    "closed caster; set at most one");
     PENUMBRA_CHECK(o.coplanar_epsilon >= 0 && o.coplanar_epsilon <= 0.1,
                    "penumbra::AliasFreeHardShadows: coplanar_epsilon ", o.coplanar_epsilon, " is outside [0, 0.1]");
+    PENUMBRA_CHECK(o.scene_extent > 0,  // NaN fails too; +inf is the uncapped rule
+                   "penumbra::AliasFreeHardShadows: scene_extent ", o.scene_extent, " must be > 0 (or +inf)");
     PENUMBRA_CHECK(o.sample_offset >= 0 && std::isfinite(o.sample_offset),
                    "penumbra::AliasFreeHardShadows: sample_offset ", o.sample_offset, " must be finite and >= 0");
     PENUMBRA_CHECK(o.list_block >= 1 && o.list_block <= 16384,
@@ -327,7 +334,7 @@ inline AfhParams afhParams(const AliasFreeHardOptions& o, const glm::vec4& light
     p.tolerance = glm::vec4(0.0f, o.sample_offset, o.directional_reach, 0.0f);
     p.grid = glm::uvec4(o.grid_width, o.grid_height, o.list_block, flags);
     p.pass = glm::uvec4(block, sample_count, afhTestedPerList(o), 0u);
-    p.exact = glm::dvec2(o.coplanar_epsilon, 0.0);
+    p.exact = glm::dvec2(o.coplanar_epsilon, o.scene_extent);
     return p;
 }
 
@@ -350,13 +357,18 @@ Real afhDet(const glm::tvec3<Real>& u, const glm::tvec3<Real>& v, const glm::tve
     return (mulRounded(cx, w.x) + mulRounded(cy, w.y)) + mulRounded(cz, w.z);
 }
 
+/// E as the float test takes it: float(min(E, 1e38)) (penumbraAfhFloatExtent; no overflow).
+inline float afhFloatExtent(double scene_extent) { return static_cast<float>(std::min(scene_extent, 1e38)); }
+
 }  // namespace detail
 
 /// The blocker test of blocker_test.glsl, same operations in the same order (Real = double for
 /// the exact mode, float for the fast one); every product opaque, so no compiler flag fuses them.
+/// `scene_extent` caps |l - p| in the coplanar scale (the oracle's E; +inf = uncapped).
 template <typename Real>
 bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::tvec3<Real>& c,
-               const glm::tvec3<Real>& p, const glm::tvec3<Real>& l, Real coplanar_epsilon, Real offset) {
+               const glm::tvec3<Real>& p, const glm::tvec3<Real>& l, Real coplanar_epsilon, Real offset,
+               Real scene_extent = std::numeric_limits<Real>::infinity()) {
     using detail::mulRounded;
     const glm::tvec3<Real> ab = b - a, ac = c - a;
     const Real nx = mulRounded(ab.y, ac.z) - mulRounded(ab.z, ac.y);
@@ -368,7 +380,7 @@ bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::
     if (!((dp < 0 && dl > 0) || (dp > 0 && dl < 0))) return false;
     const Real nn = (mulRounded(nx, nx) + mulRounded(ny, ny)) + mulRounded(nz, nz);
     const Real scale = std::max(std::max(detail::afhMaxAbs<Real>(a - p), detail::afhMaxAbs<Real>(b - p)),
-                                std::max(detail::afhMaxAbs<Real>(c - p), detail::afhMaxAbs<Real>(l - p)));
+                                std::max(detail::afhMaxAbs<Real>(c - p), std::min(detail::afhMaxAbs<Real>(l - p), scene_extent)));
     const Real tol = mulRounded(coplanar_epsilon, scale);
     const Real tol2 = mulRounded(tol, tol);
     const Real threshold = mulRounded(tol2, nn);
@@ -499,12 +511,13 @@ inline std::vector<uint32_t> aliasFreeHardCpu(const AliasFreeHardOptions& option
                     if (options.precision == AfhPrecision::Exact) {
                         const glm::dvec3 p(pf);
                         const glm::dvec3 l = point ? lpos : p + detail::mulRounded(lpos, reach);
-                        blocked = afhBlocks<double>(a, b, c, p, l, options.coplanar_epsilon, double(options.sample_offset));
+                        blocked = afhBlocks<double>(a, b, c, p, l, options.coplanar_epsilon, double(options.sample_offset),
+                                                    options.scene_extent);
                     } else {
                         const glm::vec3 lf = point ? glm::vec3(light.light)
                                                    : pf + detail::mulRounded(glm::vec3(light.light), options.directional_reach);
                         blocked = afhBlocks<float>(af, bf, cf, pf, lf, static_cast<float>(options.coplanar_epsilon),
-                                                   options.sample_offset);
+                                                   options.sample_offset, detail::afhFloatExtent(options.scene_extent));
                     }
                     if (blocked) shadowed[id] = 1;
                 }

@@ -34,7 +34,8 @@
 //                caller's triangle order (ascending index), so the bits do not depend on the BVH;
 //     medium   = exp(-sigma_t * L), L = length of the part of the segment inside the medium's box.
 //   hit(T) is EXACTLY reference/visibility.hpp's per-triangle predicate (::penumbra::detail::oracle::
-//   classifySegment with the options' tie_epsilon / coplanar_epsilon): the watertight test on the
+//   classifySegment with the options' tie_epsilon / coplanar_epsilon and the mesh's sceneExtent()
+//   capping the segment's length in the tolerances, as VisibilityOracle): the watertight test on the
 //   open segment, 0 < t < 1 (both endpoints excluded), the coplanar rule (a receiver lying on a
 //   surface is not attenuated by it, nor by the neighbours whose edges it lies on), and rule 4's
 //   locality. Degenerate triangles are dropped (never hit, never fragile) as there. Each triangle
@@ -224,7 +225,7 @@ inline void allHits(const oracle::Bvh& bvh, const oracle::SegmentQuery& query, s
     const oracle::Ray& ray = query.ray;
     double t_near = 0.0, t_far = 1.0;
     ++counters.nodes;
-    if (!oracle::slabs(nodes[0].lo, nodes[0].hi, ray, query.inflation, ray.dir_scale, t_near, t_far)) return;
+    if (!oracle::slabs(nodes[0].lo, nodes[0].hi, ray, query.inflation, query.segment_scale, t_near, t_far)) return;
     uint32_t stack[oracle::kStackSize];
     int top = 0;
     uint32_t index = 0;
@@ -239,9 +240,9 @@ inline void allHits(const oracle::Bvh& bvh, const oracle::SegmentQuery& query, s
             const uint32_t left = node.first;
             double near_l = 0.0, far_l = 1.0, near_r = 0.0, far_r = 1.0;
             const bool hit_l =
-                oracle::slabs(nodes[left].lo, nodes[left].hi, ray, query.inflation, ray.dir_scale, near_l, far_l);
+                oracle::slabs(nodes[left].lo, nodes[left].hi, ray, query.inflation, query.segment_scale, near_l, far_l);
             const bool hit_r =
-                oracle::slabs(nodes[left + 1].lo, nodes[left + 1].hi, ray, query.inflation, ray.dir_scale, near_r, far_r);
+                oracle::slabs(nodes[left + 1].lo, nodes[left + 1].hi, ray, query.inflation, query.segment_scale, near_r, far_r);
             counters.nodes += 2;
             if (hit_l && hit_r) {
                 PENUMBRA_ASSERT(top < oracle::kStackSize);
@@ -347,6 +348,8 @@ public:
     /// Triangles dropped as degenerate (they never attenuate).
     size_t degenerateTriangleCount() const { return triangle_count_ - bvh_.triangles().size(); }
     const HomogeneousMedium& medium() const { return medium_; }
+    /// E of the tolerances' scale (VisibilityOracle::sceneExtent() of the same mesh; 0 when empty).
+    double sceneExtent() const { return scene_extent_; }
     /// The opacity of the caller's triangle `triangle`.
     const Value& opacity(size_t triangle) const {
         PENUMBRA_ASSERT(triangle < triangle_count_);
@@ -439,7 +442,7 @@ public:
         if (result.end == origin) return result;
         std::vector<tr::Crossing> crossings;
         oracle::Counters counters;
-        tr::allHits(bvh_, oracle::makeSegmentQuery(origin, result.end, options), crossings, counters);
+        tr::allHits(bvh_, oracle::makeSegmentQuery(origin, result.end, options, scene_extent_), crossings, counters);
         for (const tr::Crossing& c : crossings) {
             result.fragile_triangles += c.fragile;
             if (c.hit) result.steps.push_back(RayStep<Value>{c.t * t_max, opacity_[c.triangle], c.triangle, c.fragile});
@@ -476,6 +479,7 @@ private:
         std::vector<::penumbra::detail::oracle::Triangle> triangles =
             ::penumbra::detail::oracle::oracleTriangles(positions, indices, "TransmittanceOracle");
         triangle_count_ = indices.size() / 3;
+        scene_extent_ = ::penumbra::detail::oracle::sceneExtent(triangles);
         linear_ = triangles;  // caller order, for the brute-force paths
         bvh_.build(std::move(triangles));
     }
@@ -529,7 +533,7 @@ private:
         result.medium = mediumFactor(result.medium_length);
         if (p != q) {
             scratch.clear();
-            const oracle::SegmentQuery segment = oracle::makeSegmentQuery(p, q, options);
+            const oracle::SegmentQuery segment = oracle::makeSegmentQuery(p, q, options, scene_extent_);
             if (brute_force) {
                 for (const oracle::Triangle& tri : linear_) {
                     ++counters.tests;
@@ -605,6 +609,7 @@ private:
     }
 
     size_t triangle_count_ = 0;
+    double scene_extent_ = 0;  // E of the tolerances' scale: VisibilityOracle's, on the same triangles
     std::vector<Value> opacity_;                    // caller's triangle order
     HomogeneousMedium medium_;
     std::vector<::penumbra::detail::oracle::Triangle> linear_;  // non-degenerate, caller order

@@ -94,7 +94,8 @@ struct PenumbraAfhParams {
     uvec4 grid;      // x = W, y = H, z = list block (samples per fragment per pass), w = flags
     uvec4 pass;      // x = block index of this pass, y = sample count (resolve), z = samples per
                      // list the light pass walks (max_list_blocks * list block; resolve), w = unused
-    dvec2 exact;     // x = coplanar epsilon (relative), in double as the oracle and the CPU twin use it
+    dvec2 exact;     // x = coplanar epsilon (relative), y = scene extent E capping the segment's
+                     // length in the coplanar scale (> 0, +inf = uncapped); double as the oracle's
 };
 
 // The spill-world buffer of the Fixed-6 two-pass light pass (std430): a 16-byte header, then one

@@ -6,9 +6,11 @@
 //   n  = (b - a) x (c - a);  d_p = n.(p - a),  d_l = n.(l - a)        (supporting plane)
 //   coplanar rule (oracle rule 2): ignore the triangle when p (or l) lies within eps * scale of
 //       the triangle itself (plane distance |d_p| <= eps * scale * |n| checked first as a bound),
-//       scale = max(|a - p|inf, |b - p|inf, |c - p|inf, |l - p|inf): a sample lying on a surface
-//       is never shadowed by that surface or the neighbours it touches, with no depth bias, while
-//       a grazing crossing of a neighbour near the terminator still counts;
+//       scale = max(|a - p|inf, |b - p|inf, |c - p|inf, min(|l - p|inf, E)), E = the scene's extent
+//       (the oracle's sceneExtent(); the overloads without it take E = |l - p|inf, the uncapped
+//       rule, under which a light ~1e3 scene sizes away ignores every caster): a sample lying on a
+//       surface is never shadowed by that surface or the neighbours it touches, with no depth
+//       bias, while a grazing crossing of a neighbour near the terminator still counts;
 //   p and l strictly on opposite sides (and |d_p| > offset * |n|, the optional sample offset);
 //   edge planes through l: e_i = det(v_i - l, v_i+1 - l, p - l) all >= 0 or all <= 0, not all 0
 //       (the line from l through p meets the closed triangle).
@@ -88,8 +90,10 @@ penumbraAfhReal penumbraAfhPointTriangleDistance2(penumbraAfhVec3 p, penumbraAfh
     return dot(d, d);
 }
 
+// `scene_extent` = E of the coplanar rule's scale (> 0; +inf = uncapped).
 bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, penumbraAfhVec3 p,
-                       penumbraAfhVec3 l, penumbraAfhReal coplanar_epsilon, penumbraAfhReal offset) {
+                       penumbraAfhVec3 l, penumbraAfhReal coplanar_epsilon, penumbraAfhReal offset,
+                       penumbraAfhReal scene_extent) {
     precise penumbraAfhVec3 ab = b - a;
     precise penumbraAfhVec3 ac = c - a;
     precise penumbraAfhReal nx = ab.y * ac.z - ab.z * ac.y;
@@ -102,8 +106,8 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
     // Opposite sides first: the cheapest rejection (most casters lie beside or behind a sample).
     if (!((dp < 0.0 && dl > 0.0) || (dp > 0.0 && dl < 0.0))) return false;
     precise penumbraAfhReal nn = nx * nx + ny * ny + nz * nz;
-    precise penumbraAfhReal scale =
-        max(max(penumbraAfhMaxAbs(a - p), penumbraAfhMaxAbs(b - p)), max(penumbraAfhMaxAbs(c - p), penumbraAfhMaxAbs(l - p)));
+    precise penumbraAfhReal scale = max(max(penumbraAfhMaxAbs(a - p), penumbraAfhMaxAbs(b - p)),
+                                        max(penumbraAfhMaxAbs(c - p), min(penumbraAfhMaxAbs(l - p), scene_extent)));
     precise penumbraAfhReal tol = coplanar_epsilon * scale;
     precise penumbraAfhReal threshold = tol * tol * nn;
     // Plane distance first (cheap lower bound), then the distance to the triangle itself.
@@ -121,6 +125,12 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
     bool all_nonpositive = e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0;
     bool all_zero = e0 == 0.0 && e1 == 0.0 && e2 == 0.0;
     return (all_nonnegative || all_nonpositive) && !all_zero;
+}
+
+// The uncapped rule (E = |l - p|inf: the same bits as before E existed).
+bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, penumbraAfhVec3 p,
+                       penumbraAfhVec3 l, penumbraAfhReal coplanar_epsilon, penumbraAfhReal offset) {
+    return penumbraAfhBlocks(a, b, c, p, l, coplanar_epsilon, offset, penumbraAfhMaxAbs(l - p));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -177,6 +187,8 @@ const float penumbraAfhFilterLightRel = 2.5e-7;
 const float penumbraAfhFilterTiny = 1.0e-36;
 //   no float overflow when every difference is below 2^40 (degree-3 terms < 2^126)
 const float penumbraAfhFilterMaxDifference = 1.0e12;
+//   E's float upper bound: float(min(E, 1e38)) + Tiny (1e38 >> any difference the filter accepts)
+const double penumbraAfhFilterExtentClamp = 1.0e38LF;
 
 float penumbraAfhFilterMaxAbs(vec3 v) {
     precise vec3 m = abs(v);
@@ -202,7 +214,7 @@ int penumbraAfhFilterSign(float x, float bound) {
 // PENUMBRA_AFH_FILTER_UNCERTAIN otherwise. `l` is the light point in float; `l_error` bounds
 // |l - l_double| per coordinate (0 when l_double == dvec3(l), e.g. a point light).
 int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_error, double coplanar_epsilon,
-                            double offset) {
+                            double offset, double scene_extent) {
     // Supporting plane: n = ab x ac, dp = n.(p - a), dl = n.(l - a).
     precise vec3 ab = b - a;
     precise vec3 ac = c - a;
@@ -262,11 +274,13 @@ int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_erro
 
     // Opposite sides and inside, certainly. The coplanar rule cannot fire when |dp| (and |dl|)
     // certainly exceed eps * scale * |n|2 (|n|2 <= |n|1): the distance to the triangle is at
-    // least the distance to its plane.
+    // least the distance to its plane. E is converted here, where few pairs arrive (one fp64 op).
     precise vec3 bp = p - b;
     precise vec3 cp = p - c;
+    precise float extent_up = float(min(scene_extent, penumbraAfhFilterExtentClamp)) + penumbraAfhFilterTiny;
+    precise float segment = min(max(mlp.x, max(mlp.y, mlp.z)) + l_error, extent_up);
     precise float scale = max(max(penumbraAfhFilterMaxAbs(ap), penumbraAfhFilterMaxAbs(bp)),
-                              max(penumbraAfhFilterMaxAbs(cp), max(mlp.x, max(mlp.y, mlp.z)) + l_error));
+                              max(penumbraAfhFilterMaxAbs(cp), segment));
     precise float n1 = (abs(nx) + abs(ny) + abs(nz)) + penumbraAfhFilterNormalRel * q_sum + abs_plane;
     precise float eps_up = float(coplanar_epsilon) + penumbraAfhFilterTiny;
     precise float tol_n = penumbraAfhFilterSlack * ((eps_up * scale) * n1) + abs_plane;
@@ -287,56 +301,105 @@ int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_erro
     return PENUMBRA_AFH_FILTER_TRUE;
 }
 
-// Filter, then the double test where the filter is uncertain. light.w != 0: point light at
-// light.xyz; light.w == 0: directional, unit vector light.xyz, light point `reach` away.
-// `fallbacks` counts the pairs that took the double test.
-bool penumbraAfhBlocksFilteredCounted(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
-                                      double offset, inout uint fallbacks) {
-    const bool point_light = light.w != 0.0;
-    vec3 l = light.xyz;
-    float l_error = 0.0;
-    if (!point_light) {
+// The uncapped rule (+inf's float bound: min(|l - p| + l_error, 1e38) = |l - p| + l_error).
+int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_error, double coplanar_epsilon,
+                            double offset) {
+    return penumbraAfhBlocksFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset, penumbraAfhFilterExtentClamp);
+}
+
+// The float light point and its l_error (host: detail::blockerFilterLightPoint).
+void penumbraAfhFilterLightPoint(vec3 p, vec4 light, float reach, out vec3 l, out float l_error) {
+    l = light.xyz;
+    l_error = 0.0;
+    if (light.w == 0.0) {
         precise vec3 t = light.xyz * reach;
         precise vec3 ld = p + t;
         precise float e = penumbraAfhFilterLightRel * (penumbraAfhFilterMaxAbs(t) + penumbraAfhFilterMaxAbs(ld));
         l = ld;
         l_error = e + penumbraAfhFilterTiny;
     }
-    const int verdict = penumbraAfhBlocksFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset);
+}
+
+// Filter, then the double test where the filter is uncertain. light.w != 0: point light at
+// light.xyz; light.w == 0: directional, unit vector light.xyz, light point `reach` away.
+// `fallbacks` counts the pairs that took the double test.
+bool penumbraAfhBlocksFilteredCounted(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
+                                      double offset, double scene_extent, inout uint fallbacks) {
+    const bool point_light = light.w != 0.0;
+    vec3 l;
+    float l_error;
+    penumbraAfhFilterLightPoint(p, light, reach, l, l_error);
+    const int verdict = penumbraAfhBlocksFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset, scene_extent);
     if (verdict != PENUMBRA_AFH_FILTER_UNCERTAIN) return verdict == PENUMBRA_AFH_FILTER_TRUE;
     ++fallbacks;
+    return penumbraAfhBlocks(dvec3(a), dvec3(b), dvec3(c), dvec3(p),
+                             penumbraAfhLightPoint(dvec3(p), dvec3(light.xyz), double(reach), point_light),
+                             coplanar_epsilon, offset, scene_extent);
+}
+
+bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
+                               double offset, double scene_extent) {
+    uint fallbacks = 0u;
+    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, scene_extent, fallbacks);
+}
+
+// The uncapped rule: the filter's and the double test's overloads without E, as before E existed.
+bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
+                               double offset) {
+    const bool point_light = light.w != 0.0;
+    vec3 l;
+    float l_error;
+    penumbraAfhFilterLightPoint(p, light, reach, l, l_error);
+    const int verdict = penumbraAfhBlocksFilter(a, b, c, p, l, l_error, coplanar_epsilon, offset);
+    if (verdict != PENUMBRA_AFH_FILTER_UNCERTAIN) return verdict == PENUMBRA_AFH_FILTER_TRUE;
     return penumbraAfhBlocks(dvec3(a), dvec3(b), dvec3(c), dvec3(p),
                              penumbraAfhLightPoint(dvec3(p), dvec3(light.xyz), double(reach), point_light),
                              coplanar_epsilon, offset);
 }
 
-bool penumbraAfhBlocksFiltered(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, double coplanar_epsilon,
-                               double offset) {
-    uint fallbacks = 0u;
-    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
-}
-
 #endif  // PENUMBRA_AFH_EXACT
+
+// E as the float test takes it (PENUMBRA_AFH_EXACT 0): float(min(E, 1e38)), no overflow in the
+// conversion (the host twin: detail::afhFloatExtent).
+float penumbraAfhFloatExtent(double scene_extent) { return float(min(scene_extent, 1.0e38LF)); }
 
 // The light pass's call: float inputs as stored, the variant the defines select (exact filtered,
 // exact fp64-only with PENUMBRA_AFH_FILTERED 0, or float with PENUMBRA_AFH_EXACT 0). `fallbacks`
-// counts the filtered mode's double tests (unchanged otherwise).
+// counts the filtered mode's double tests (unchanged otherwise). `scene_extent`: E, in double.
 bool penumbraAfhBlocksLightCounted(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
-                                   penumbraAfhReal offset, inout uint fallbacks) {
+                                   penumbraAfhReal offset, double scene_extent, inout uint fallbacks) {
 #if PENUMBRA_AFH_EXACT && PENUMBRA_AFH_FILTERED
-    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
+    return penumbraAfhBlocksFilteredCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, scene_extent, fallbacks);
+#else
+    const penumbraAfhVec3 l = penumbraAfhLightPoint(penumbraAfhVec3(p), penumbraAfhVec3(light.xyz), penumbraAfhReal(reach),
+                                                    light.w != 0.0);
+#if PENUMBRA_AFH_EXACT
+    const penumbraAfhReal extent = scene_extent;
+#else
+    const penumbraAfhReal extent = penumbraAfhFloatExtent(scene_extent);
+#endif
+    return penumbraAfhBlocks(penumbraAfhVec3(a), penumbraAfhVec3(b), penumbraAfhVec3(c), penumbraAfhVec3(p), l,
+                             coplanar_epsilon, offset, extent);
+#endif
+}
+
+bool penumbraAfhBlocksLight(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
+                            penumbraAfhReal offset, double scene_extent) {
+    uint fallbacks = 0u;
+    return penumbraAfhBlocksLightCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, scene_extent, fallbacks);
+}
+
+// The uncapped rule (the overloads without E; same bits as before E existed).
+bool penumbraAfhBlocksLight(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
+                            penumbraAfhReal offset) {
+#if PENUMBRA_AFH_EXACT && PENUMBRA_AFH_FILTERED
+    return penumbraAfhBlocksFiltered(a, b, c, p, light, reach, coplanar_epsilon, offset);
 #else
     const penumbraAfhVec3 l = penumbraAfhLightPoint(penumbraAfhVec3(p), penumbraAfhVec3(light.xyz), penumbraAfhReal(reach),
                                                     light.w != 0.0);
     return penumbraAfhBlocks(penumbraAfhVec3(a), penumbraAfhVec3(b), penumbraAfhVec3(c), penumbraAfhVec3(p), l,
                              coplanar_epsilon, offset);
 #endif
-}
-
-bool penumbraAfhBlocksLight(vec3 a, vec3 b, vec3 c, vec3 p, vec4 light, float reach, penumbraAfhReal coplanar_epsilon,
-                            penumbraAfhReal offset) {
-    uint fallbacks = 0u;
-    return penumbraAfhBlocksLightCounted(a, b, c, p, light, reach, coplanar_epsilon, offset, fallbacks);
 }
 
 #endif

@@ -66,6 +66,7 @@ void main() {
     const float reach = penumbraAfhParams.tolerance.z;
     const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
     const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
+    const double scene_extent = penumbraAfhParams.exact.y;  // E of the coplanar rule's scale
     uint tests = 0u, fallbacks = 0u, skipped = 0u;
     for (uint slot = range.x; slot < range.x + range.y; ++slot) {
         // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
@@ -81,7 +82,7 @@ void main() {
         // segment is parallel to the light direction; casters must lie within reach). Exact mode:
         // filtered (float with a proven bound, double where uncertain) unless PENUMBRA_AFH_FILTERED 0.
         if (penumbraAfhBlocksLightCounted(penumbraAfhVertex0, penumbraAfhVertex1, penumbraAfhVertex2, p,
-                                          penumbraAfhParams.light, reach, eps, offset, fallbacks)) {
+                                          penumbraAfhParams.light, reach, eps, offset, scene_extent, fallbacks)) {
             penumbraSampleListsSetShadowBit(slot, 0u);
         }
     }

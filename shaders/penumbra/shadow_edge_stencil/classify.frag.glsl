@@ -52,7 +52,7 @@ void main() {
         for (uint k = 0u; k <= n; ++k) {
             vec3 p = k == 0u ? penumbraAaCentres[i].xyz : penumbraAaSubSamples[i * n + k - 1u].xyz;
             blocked += penumbraAfhBlocksLight(penumbraAaVertex0, penumbraAaVertex1, penumbraAaVertex2, p, light, float(reach), eps,
-                                              0.0lf) ? 1u : 0u;
+                                              0.0lf, penumbraAaParams.numbers.w) ? 1u : 0u;
         }
         exact += n + 1u;
         if (blocked == n + 1u) atomicOr(penumbraAaStencil[i], PENUMBRA_AA_COVERED);

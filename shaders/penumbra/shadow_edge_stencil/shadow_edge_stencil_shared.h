@@ -67,7 +67,7 @@ struct PenumbraAaFootprint {
 struct PenumbraAaParams {
     dvec4 inverse_view_projection[4];  // view clip -> world, columns (double of the engine's float matrix)
     dvec4 light_view_projection[4];    // world -> light clip, columns (double of the float matrix): binning
-    dvec4 numbers;                     // x: coplanar epsilon, y: directional reach, z: view clip z of the near plane, w: 0
+    dvec4 numbers;                     // x: coplanar epsilon, y: directional reach, z: view clip z of the near plane, w: scene extent E (the exact test's coplanar scale cap)
     mat4 light_clip;                   // the same light matrix in float: the casters' raster
     vec4 light;                        // w = 1: point light position; w = 0: direction towards the light
     vec4 offsets[PENUMBRA_AA_MAX_SAMPLES / 2];  // sub-sample offsets (pixels), two per vec4 (xy, zw)
