@@ -1216,6 +1216,7 @@ int runHardAa(const Args& args, const penumbra::reference::VisibilityOracle& ora
     options.grid_height = h;
     options.count_work = true;
     if (v.depth_input) options.coplanar_epsilon = kDepthCoplanarEpsilon;
+    options.scene_extent = oracle.sceneExtent();  // the oracle's E: far lights keep their shadows
     // --skips: the hard pipeline's skips but cull (light_facing_only): the stencil classifies every caster.
     options.fit_frustum = args.skip("fit");
     options.skip_shadowed = args.skip("shadowed");
@@ -1544,6 +1545,7 @@ int runHard(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         o.grid_height = h;
         o.count_work = true;
         if (depth_input) o.coplanar_epsilon = kDepthCoplanarEpsilon;
+        o.scene_extent = oracle.sceneExtent();  // the oracle's E: far lights keep their shadows
         o.light_facing_only = !all_off && args.skip("cull");
         o.fit_frustum = !all_off && args.skip("fit");
         o.skip_shadowed = !all_off && args.skip("shadowed");
@@ -2328,6 +2330,7 @@ int runHpc(const Args& args, const penumbra::scene::Scene& scene, const penumbra
     // ---- penumbra casting: every triangle streamed once, no scene hierarchy ----
     t0 = std::chrono::steady_clock::now();
     penumbra::PenumbraCastingOptions options;
+    options.scene_extent = oracle.sceneExtent();  // the oracle's E: far lights keep their shadows
     auto last_progress = std::chrono::steady_clock::now();
     options.progress = [&last_progress, t0](double fraction) {  // every 3 s at most, on stderr
         const auto now = std::chrono::steady_clock::now();
