@@ -322,6 +322,96 @@ TEST_SUITE("stress") {
     }
 }
 
+// Issue 41: a light 1e3 and 1e6 scene sizes away (radius 1 % of its distance) along a fixed
+// direction, coplanar epsilon 2e-5 (the demo's for depth-rebuilt samples; uncapped, its reach at
+// 1e6 is 20: every caster ignored, no shadows). With scene_extent = the oracle's sceneExtent(),
+// Exact and Brute equal VisibilityOracle::evaluate (which passes E) on every non-tie bit, through
+// the fragment stage (deferred_pairs = 0) and the deferred compute and exact-test passes, and the
+// light casts shadows.
+TEST_CASE("GPU sample-based soft: far lights with scene_extent = the oracle's E equal the oracle (issue 41)") {
+    penumbra::test::context();
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const penumbra::scene::Mesh mesh = scene.merged();
+    const std::vector<dvec3> mesh_d(mesh.positions.begin(), mesh.positions.end());
+    const penumbra::reference::VisibilityOracle oracle(mesh_d, mesh.indices);
+    penumbra::reference::VisibilityOptions oracle_options;
+    oracle_options.coplanar_epsilon = 2e-5;
+    const dvec3 direction = glm::normalize(dvec3(scene.light.position));
+    const std::vector<glm::vec3> points = surfacePoints(mesh, 400, penumbra::test::testSeed());
+    std::vector<glm::vec4> positions4;
+    for (const auto& p : points) positions4.emplace_back(p, 1.0f);
+    const penumbra::gl::Buffer positions = penumbra::gl::Buffer::fromVector(positions4);
+    const penumbra::SampleBufferInput input{{positions.id(), 0, positions.size()}, {}};
+    const GpuMesh gpu_mesh(mesh);
+    const uint32_t n = 128, words = n / 32;
+    for (const double distance : {1e3, 1e6}) {
+        INFO("distance " << distance);
+        penumbra::Light light;
+        light.center = direction * distance;
+        light.size = dvec3(distance * 1e-2);
+        const penumbra::LightSampleSets sets = sphereSets(light.center, distance * 1e-2, n, 1, 11);
+        const CertifiedLut certified(sets, 64);
+        // The demo's grid: the §4.3 fit of the view samples, its far plane 1 % beyond the farthest.
+        penumbra::SampleListsLight fit_light;
+        fit_light.light = glm::vec4(glm::vec3(light.center), 1.0f);
+        fit_light.view_projection = receiverGrid(points, light, 64, 0.0f).vp;
+        penumbra::SampleListsOptions fit_options;
+        fit_options.cull_back_facing = false;
+        fit_options.depth_range = penumbra::LightDepthRange::Unclipped;
+        const penumbra::LightFrustumFit fit = penumbra::fitLightFrustumCpu(penumbra::sampleListsSetup(64, 64, uint32_t(points.size())),
+                                                                           fit_light, positions4.data(), nullptr, fit_options);
+        REQUIRE(fit.valid);
+        ReceiverGrid grid;
+        grid.vp = fit.view_projection;
+        double far_depth = 0.0;
+        for (const glm::vec4& q : positions4) far_depth = std::max(far_depth, double((grid.vp * q).w));
+        penumbra::InfluenceRegionOptions io;
+        io.grid_width = io.grid_height = 64;
+        io.far_plane = penumbra::influenceFarPlaneAtDepth(grid.vp, far_depth * 1.01 + 1e-3);
+        grid.influence = penumbra::influenceRegionSetup(light, grid.vp, io);
+        const penumbra::reference::VisibilityResult truth = oracle.evaluate(
+            std::vector<dvec3>(points.begin(), points.end()), std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + n),
+            oracle_options);
+        uint64_t blocked = 0;
+        for (size_t r = 0; r < points.size(); ++r) blocked += truth.blockedCount(r);
+        CHECK(blocked > points.size() * n / 50);  // the light casts shadows at every distance
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Brute}) {
+            for (const uint32_t deferred : {0u, 1u << 20}) {
+                const bool brute = mode == penumbra::SoftMode::Brute;
+                INFO("mode " << std::string(penumbra::softModeName(mode)) << ", deferred_pairs " << deferred);
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 64;
+                options.oracle = oracle_options;
+                options.scene_extent = oracle.sceneExtent();
+                options.deferred_pairs = deferred;
+                penumbra::SampleBasedSoftShadows pipeline(options, sets, brute ? nullptr : &certified.lut, grid.influence, grid.vp);
+                pipeline.reserve(uint32_t(points.size()));
+                const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : certified.table();
+                REQUIRE(pipeline.run(input, uint32_t(points.size()), table, [&](penumbra::CasterClass c) {
+                    if (c == penumbra::CasterClass::Open) gpu_mesh.draw();
+                }) == Status::Ok);
+                const std::vector<uint32_t> masks = pipeline.readMasks();
+                const std::vector<float> visibility = pipeline.readVisibility();
+                const penumbra::SampleBasedSoftFrame f = pipeline.readFrame();
+                penumbra::gl::checkErrors("sample_based_soft_gl_test far lights");
+                const Tally t = compareOracle(masks, words, visibility, truth);
+                uint64_t gpu_blocked = 0;
+                for (const uint32_t m : masks) gpu_blocked += uint64_t(__builtin_popcount(m));
+                MESSAGE("far light at ", distance, ", ", std::string(penumbra::softModeName(mode)), ", deferred_pairs ", deferred, ": ",
+                        t.bits, " bits, ", blocked, " blocked (oracle), ", gpu_blocked, " (GPU), ", t.ties, " ties, mismatched ",
+                        t.mismatched, ", untested ", t.untested, "; pairs ", f.pairs, ", ignored ", f.pairs_ignored, ", unproven ",
+                        f.pairs_unproven, ", exact tests ", f.exact_tests);
+                CHECK(t.untested == 0);
+                CHECK(f.overflow == 0);
+                CHECK(t.mismatched == 0);
+                CHECK(gpu_blocked > 0);
+                if (!brute) CHECK(f.pairs_unproven < f.pairs);  // the LUT still vouches for pairs
+            }
+        }
+    }
+}
+
 TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup errors throw") {
     penumbra::test::context();
     penumbra::Light light;

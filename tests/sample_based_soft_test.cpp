@@ -174,6 +174,65 @@ TEST_SUITE("stress") {
 TEST_CASE("sample-based soft (CPU twin): the same with 2000 receivers and N = 1024 everywhere") { equalsOracle(true); }
 }
 
+// Issue 41: the oracle caps |s - p|_inf in its tolerance scale at the scene's extent E; a light
+// 1e3 and 1e6 scene sizes away (radius 1 % of its distance) along a fixed direction, coplanar
+// epsilon 2e-5 (the demo's for depth-rebuilt samples: uncapped, its reach at 1e6 is 20 and every
+// caster is ignored). With scene_extent = oracle.sceneExtent(), Exact and Brute equal
+// VisibilityOracle::evaluate (which passes E) on every non-tie bit, and the light casts shadows.
+TEST_CASE("sample-based soft (CPU twin): far lights with scene_extent = the oracle's E equal the oracle (issue 41)") {
+    const penumbra::scene::Scene scene = penumbra::scene::torusKnot(24);
+    const penumbra::scene::Mesh mesh = scene.merged();
+    std::vector<dvec3> positions(mesh.positions.begin(), mesh.positions.end());
+    const penumbra::reference::VisibilityOracle oracle(positions, mesh.indices);
+    penumbra::reference::VisibilityOptions oracle_options;
+    oracle_options.coplanar_epsilon = 2e-5;
+    const dvec3 direction = glm::normalize(dvec3(scene.light.position));
+    const std::vector<glm::vec3> points = surfacePoints(mesh, 200, penumbra::test::testSeed());
+    const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(), mesh.triangleCount()};
+    const penumbra::SoftReceivers receivers{points.data(), points.size(), nullptr};
+    for (const double distance : {1e3, 1e6}) {
+        INFO("distance " << distance);
+        penumbra::Light light;
+        light.center = direction * distance;
+        light.size = dvec3(distance * 1e-2);
+        penumbra::LightSampleOptions sample_options;
+        sample_options.count = 128;
+        sample_options.sets = 1;
+        sample_options.seed = 11;
+        const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
+        penumbra::LightLutOptions lut_options;
+        lut_options.resolution = 64;
+        lut_options.certified = true;
+        const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
+        const std::vector<uint32_t> words = penumbra::generateLightLut(lut);
+        const penumbra::reference::VisibilityResult truth = oracle.evaluate(
+            std::vector<dvec3>(points.begin(), points.end()), std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128),
+            oracle_options);
+        uint64_t blocked = 0;
+        for (size_t r = 0; r < points.size(); ++r) blocked += truth.blockedCount(r);
+        CHECK(blocked > points.size() * 128 / 50);  // the light casts shadows at every distance
+        penumbra::SampleBasedSoftOptions options;
+        options.oracle = oracle_options;
+        options.scene_extent = oracle.sceneExtent();
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Brute}) {
+            options.mode = mode;
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            const penumbra::SampleBasedSoftCpuResult result = penumbra::sampleBasedSoftCpu(
+                sets, brute ? nullptr : &lut, brute ? nullptr : words.data(), casters, receivers, options);
+            const Tally t = compare(result, truth);
+            uint64_t twin_blocked = 0;
+            for (size_t r = 0; r < points.size(); ++r) twin_blocked += result.blockedCount(r);
+            MESSAGE("far light at ", distance, ", ", std::string(penumbra::softModeName(mode)), ": ", t.bits, " bits, ", blocked,
+                    " blocked (oracle), ", twin_blocked, " (twin), ", t.ties, " ties, mismatched ", t.mismatched,
+                    "; pairs ", result.pairs, ", ignored ", result.pairs_ignored, ", unproven ", result.pairs_unproven,
+                    ", exact tests ", result.exact_tests);
+            CHECK(t.mismatched == 0);
+            CHECK(twin_blocked > 0);
+            if (!brute) CHECK(result.pairs_unproven < result.pairs);  // the LUT still vouches for pairs
+        }
+    }
+}
+
 TEST_CASE("sample-based soft (CPU twin): bad input") {
     penumbra::Light light;
     light.center = dvec3(0, 4, 0);
@@ -212,6 +271,21 @@ TEST_CASE("sample-based soft (CPU twin): bad input") {
     CHECK(contains(errorOf([&] { penumbra::sampleBasedSoftCpu(sets, &seed_lut, words.data(), casters, receivers, options); }),
                    "rotations = 300"));
     options.rotations = 1;
+    for (const double bad_extent : {0.0, -2.5, std::numeric_limits<double>::quiet_NaN()}) {
+        options.scene_extent = bad_extent;
+        const std::string what =
+            errorOf([&] { penumbra::sampleBasedSoftCpu(sets, &seed_lut, words.data(), casters, receivers, options); });
+        INFO(what);
+        CHECK(contains(what, "scene_extent"));
+        CHECK(contains(what, std::isnan(bad_extent) ? "nan" : bad_extent == 0.0 ? " 0 " : "-2.5"));
+        penumbra::SampleBasedSoftGpuOptions gpu;
+        gpu.grid_width = gpu.grid_height = 16;
+        gpu.scene_extent = bad_extent;
+        const std::string gpu_what = errorOf([&] { penumbra::validateSampleBasedSoftGpuOptions(gpu); });
+        INFO(gpu_what);
+        CHECK(contains(gpu_what, "scene_extent"));
+    }
+    options.scene_extent = std::numeric_limits<double>::infinity();
     {
         penumbra::Light rectangle = light;  // not symmetric about local z: rotation steps refused
         rectangle.shape = penumbra::LightShape::Rectangle;
@@ -1534,7 +1608,8 @@ TEST_CASE("SoftSkips::silhouettes: where coplanarOpen is false the oracle's ligh
                 const double scale_v = std::max(maxAbs(v0 - p), std::max(maxAbs(v1 - p), maxAbs(v2 - p)));
                 p_open = p_open || soft::coplanarOpen(planes[t], p, scale_v, penumbra::detail::pointTriangleDistance2<double>(p, v0, v1, v2),
                                                       penumbra::detail::pointTriangleDistance2<double>(sets.frame.center, v0, v1, v2),
-                                                      sets.frame.center, light_reach, o.coplanar_epsilon);
+                                                      sets.frame.center, light_reach, o.coplanar_epsilon,
+                                                      std::numeric_limits<double>::infinity());  // the query's uncapped rule
             }
             open += p_open;
             int first = -1;

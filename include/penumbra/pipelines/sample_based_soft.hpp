@@ -177,6 +177,10 @@ struct SampleBasedSoftOptions {
     uint32_t rotations = 1;
     /// closed_casters and plane_cut (empty_blocks is the GPU's); the masks do not change.
     SoftSkips skips{};
+    /// E of the oracle's tolerance scale (> 0): the largest side of the scene's bounding box, as
+    /// VisibilityOracle::sceneExtent(). +inf = the uncapped rule: lights ~1e3 scene sizes away
+    /// then lose their shadows (issue 41).
+    double scene_extent = std::numeric_limits<double>::infinity();
 };
 
 /// Casters: indexed triangles (float positions, as the GPU sees them).
@@ -439,12 +443,14 @@ inline bool casterPlaneCuts(const CasterPlane& c, const glm::dvec3& p, double re
 /// that side too (no segment meets the plane) or so close to the plane that every segment meets
 /// it within epsilon * s_min of p, where every triangle is ignored for every light sample
 /// (s_min <= |l - p|_inf for each light point l). scale_v: max |v_i - p|_inf; distance2: p to T,
-/// light_distance2: the light's centre to T, both squared.
+/// light_distance2: the light's centre to T, both squared. scene_extent: the oracle's E; s_min and
+/// s_max are capped at it as the oracle caps |l - p|_inf (min(., E) is monotone: still bounds).
 inline bool coplanarOpen(const CasterPlane& c, const glm::dvec3& p, double scale_v, double distance2, double light_distance2,
-                         const glm::dvec3& centre, double light_reach, double epsilon) {
+                         const glm::dvec3& centre, double light_reach, double epsilon, double scene_extent) {
     const glm::dvec3 to_centre = centre - p;
     const double centre_reach = std::max(std::fabs(to_centre.x), std::max(std::fabs(to_centre.y), std::fabs(to_centre.z)));
-    const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
+    const double s_min = std::min(std::max(0.0, centre_reach - light_reach), scene_extent);
+    const double s_max = std::min(centre_reach + light_reach, scene_extent);
     const double reach = epsilon * std::max(scale_v, s_max);
     const double light_near = reach + light_reach;
     const bool p_near = !(distance2 > reach * reach * (1.0 + 1e-9));
@@ -590,6 +596,8 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
     for (size_t i = 0; i < casters.vertex_count; ++i)
         PENUMBRA_CHECK(finite(casters.positions[i]), "sampleBasedSoftCpu: caster vertex ", i, " is not finite");
+    PENUMBRA_CHECK(options.scene_extent > 0.0,  // NaN fails too; +inf is the uncapped rule
+                   "sampleBasedSoftCpu: scene_extent ", options.scene_extent, " must be > 0 (or +inf)");
     const uint32_t rotations = options.rotations;
     const std::vector<glm::dvec4> table = sampleBasedSoftSampleTable(sets, rotations);  // checks rotations
     for (size_t r = 0; r < receivers.count; ++r) {
@@ -612,6 +620,7 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
     const double margin_world = budget * min_scale;
     const double eps = std::max(options.oracle.tie_epsilon, options.oracle.coplanar_epsilon);
     const double light_reach = max_scale * std::sqrt(3.0);  // |x - centre| over the light, any norm
+    const double extent = options.scene_extent;             // the oracle's E
     const uint32_t tables = lut ? lut->params.tables_per_set : 0;
     // T's plane depends on T alone: built once per caster, oriented per receiver by negation (exact:
     // every operation of localPlane commutes with it, so the bits are those of building it flipped).
@@ -669,9 +678,11 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
         const glm::dvec4* world = table.data() + (size_t(set) * rotations + step) * n;
         const glm::dvec2 turn(table[size_t(n) * k * rotations + step]);
         uint32_t* out = result.masks.data() + r * words;
-        // Bounds of the oracle's per-sample scale term |s - p|_inf over the light.
+        // Bounds of the oracle's per-sample scale term min(|s - p|_inf, E) over the light (capping
+        // keeps them bounds: min(., E) is monotone). s_far: uncapped, for rounding (below).
         const double centre_reach = soft::maxAbs3(frame.center - p);
-        const double s_min = std::max(0.0, centre_reach - light_reach), s_max = centre_reach + light_reach;
+        const double s_far = centre_reach + light_reach;
+        const double s_min = std::min(std::max(0.0, centre_reach - light_reach), extent), s_max = std::min(s_far, extent);
         const double light_far = oracle::length3(frame.center) + light_reach;  // |x| over the light
 
         // SoftSkips::closed_casters, exactly: sweep 0 evaluates every caster but the culled ones and
@@ -709,7 +720,7 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
             auto decide = [&](uint32_t s) {  // the oracle's verdict for one pair
                 ++result.exact_tests;
                 const oracle::Verdict v =
-                    oracle::classifySegment(tri, oracle::makeSegmentQuery(p, glm::dvec3(world[s]), options.oracle));
+                    oracle::classifySegment(tri, oracle::makeSegmentQuery(p, glm::dvec3(world[s]), options.oracle, extent));
                 return v.hit;
             };
             if (mode == SoftMode::Brute) {
@@ -731,7 +742,12 @@ inline SampleBasedSoftCpuResult sampleBasedSoftCpu(const LightSampleSets& sets, 
                 // come that close to T (a light touching a caster, not an ordinary scene).
                 const double light_near = 2.0 * options.oracle.coplanar_epsilon * scale_hi + light_reach;
                 const bool light_touches = light_distance2[t] <= light_near * light_near * (1.0 + 1e-9);
-                const double margin_reach = 2.0 * (light_touches ? eps : options.oracle.tie_epsilon) * scale_hi;
+                // The tie term stays uncapped (s_far): a certain bit's margin at the light must stay
+                // far above the oracle's rounding, which is relative to |s - p|_inf (its shear and
+                // edge functions see the light's direction, not the capped scale). Near lights: the
+                // old value; far ones only take more pairs sample by sample.
+                const double margin_reach =
+                    2.0 * std::max(light_touches ? eps * scale_hi : 0.0, options.oracle.tie_epsilon * std::max(scale_v, s_far));
                 near = distance2 <= reach * reach * (1.0 + 1e-9);
                 unproven = mode == SoftMode::Exact && (near || !(margin_world > margin_reach));
             }
@@ -865,6 +881,10 @@ struct SampleBasedSoftGpuOptions {
     /// The oracle's tolerances the exact test reproduces (coplanar rule 2; tie_epsilon only widens
     /// the proof margins): compare with reference::VisibilityOracle built with the same options.
     reference::VisibilityOptions oracle{};
+    /// E of the oracle's tolerance scale (> 0): the largest side of the scene's bounding box, as
+    /// VisibilityOracle::sceneExtent(). +inf = the uncapped rule: lights ~1e3 scene sizes away then
+    /// lose their shadows (issue 41).
+    double scene_extent = std::numeric_limits<double>::infinity();
     /// Fraction of the LUT's tolerance a plane's rounding may use before the plane counts as
     /// unproven (all-uncertain). The CPU twin uses 0.5; the GPU looks planes up in float after the
     /// fp64 construction, and the rounding to float (<= 3 * 2^-24 in d and in the normal) takes
@@ -942,6 +962,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
     PENUMBRA_CHECK(o.oracle.coplanar_epsilon >= 0.0 && o.oracle.coplanar_epsilon <= 0.1 && o.oracle.tie_epsilon >= 0.0 &&
                        o.oracle.tie_epsilon <= 0.1,
                    "penumbra::SampleBasedSoftShadows: oracle epsilons must be in [0, 0.1]");
+    PENUMBRA_CHECK(o.scene_extent > 0.0,  // NaN fails too; +inf is the uncapped rule
+                   "penumbra::SampleBasedSoftShadows: scene_extent ", o.scene_extent, " must be > 0 (or +inf)");
     PENUMBRA_CHECK(o.plane_budget > 0.0 && o.plane_budget <= 0.5, "penumbra::SampleBasedSoftShadows: plane_budget = ",
                    o.plane_budget, " must be in (0, 0.5]");
     PENUMBRA_CHECK(o.rotations >= 1 && o.rotations <= 256, "penumbra::SampleBasedSoftShadows: rotations = ", o.rotations,
@@ -978,7 +1000,7 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
     }
     const LightFrame& f = sets.frame;
     SbsParams p{};
-    p.center = glm::dvec4(f.center, 0.0);
+    p.center = glm::dvec4(f.center, o.scene_extent);  // w: the oracle's E
     for (int i = 0; i < 3; ++i) p.rotation[i] = glm::dvec4(f.rotation[i], 0.0);
     const double min_scale = std::min(f.scale.x, std::min(f.scale.y, f.scale.z));
     const double max_scale = std::max(f.scale.x, std::max(f.scale.y, f.scale.z));
@@ -1021,7 +1043,8 @@ inline SbsParams sampleBasedSoftParams(const SampleBasedSoftGpuOptions& o, const
 /// tie_epsilon 1e-9 the LUT's default 1e-6 suffices for scenes up to ~10^2 light radii across; a
 /// larger tolerance widens every lookup's uncertain band by that much (cell coordinates, next to
 /// the cells' half width 1/R): use this value, not more. Never below 1e-6. Throws for a
-/// non-finite box.
+/// non-finite box. The tie reach here is uncapped by scene_extent, as Exact's check is (rounding
+/// follows |s - p|_inf): far lights need this tolerance or take pairs sample by sample.
 inline double sampleBasedSoftLutTolerance(const SampleBasedSoftGpuOptions& o, const LightFrame& frame,
                                           const glm::dvec3& lo, const glm::dvec3& hi) {
     validateSampleBasedSoftGpuOptions(o);

@@ -77,11 +77,13 @@ bool penumbraSbsCasterPlaneCuts(PenumbraSbsCasterPlane c, dvec3 p, double reach)
 // light_distance2: the light's centre to T squared. False needs the whole light strictly on one
 // side of T's plane and p either strictly on that side too (no segment meets the plane) or so
 // close to it that every segment meets the plane within epsilon * s_min of p (s_min <= |l - p|_inf
-// for every light point l), where every triangle is ignored for every sample.
+// for every light point l), where every triangle is ignored for every sample. scene_extent: the
+// oracle's E; s_min and s_max capped at it as the oracle caps |l - p|_inf (monotone: still bounds).
 bool penumbraSbsCoplanarOpen(PenumbraSbsCasterPlane c, dvec3 p, double scale_v, double distance2, double light_distance2,
-                             dvec3 centre, double light_reach, double epsilon) {
+                             dvec3 centre, double light_reach, double epsilon, double scene_extent) {
     const double centre_reach = penumbraSbsMaxAbs(centre - p);
-    const double s_min = max(0.0LF, centre_reach - light_reach), s_max = centre_reach + light_reach;
+    const double s_min = min(max(0.0LF, centre_reach - light_reach), scene_extent);
+    const double s_max = min(centre_reach + light_reach, scene_extent);
     precise double reach = epsilon * max(scale_v, s_max);
     precise double light_near = reach + light_reach;
     const bool p_near = !(distance2 > reach * reach * (1.0LF + 1e-9LF));

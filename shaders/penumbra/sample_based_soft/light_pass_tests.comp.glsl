@@ -34,7 +34,7 @@ void main() {
     while (bits != 0u) {
         const uint bit = uint(findLSB(bits));
         bits &= bits - 1u;
-        if (penumbraAfhBlocks(v0, v1, v2, p, penumbraSbsSamples[sample_base + bit].xyz, P.epsilon.x, 0.0LF)) m |= 1u << bit;
+        if (penumbraAfhBlocks(v0, v1, v2, p, penumbraSbsSamples[sample_base + bit].xyz, P.epsilon.x, 0.0LF, P.center.w)) m |= 1u << bit;
     }
     if (m != 0u) atomicOr(penumbraSbsMasks[id * P.config.w + w], m);
 }

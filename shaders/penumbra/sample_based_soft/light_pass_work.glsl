@@ -285,10 +285,13 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
             ++recovered;
         }
 #endif
-        // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples.
+        // The oracle's scale (rules 2/3) for this pair lies in [scale_lo, scale_hi] over the samples;
+        // its segment term min(|s - p|_inf, E) (E = P.center.w) between the capped s_min and s_max
+        // (min(., E) is monotone). s_far: uncapped, for the rounding term of margin_reach.
         const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
         const double centre_reach = penumbraSbsMaxAbs(P.center.xyz - p);
-        const double s_min = max(0.0LF, centre_reach - P.bounds.x), s_max = centre_reach + P.bounds.x;
+        const double s_far = centre_reach + P.bounds.x;
+        const double s_min = min(max(0.0LF, centre_reach - P.bounds.x), P.center.w), s_max = min(s_far, P.center.w);
         const double scale_lo = max(scale_v, s_min), scale_hi = max(scale_v, s_max);
         double distance2 = -1.0LF;  // p to T, squared: computed once, where first needed
 #if PENUMBRA_SBS_CLOSED_CASTERS
@@ -323,11 +326,13 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
                 continue;
             }
             precise double reach = 2.0LF * P.epsilon.z * scale_hi;
-            // The LUT's margin must exceed the oracle's tie/rounding reach at the light samples, and
-            // its coplanar reach where the light comes that close to T (the CPU twin's rule).
+            // The LUT's margin must exceed the oracle's tie/rounding reach at the light samples (uncapped:
+            // its rounding follows |s - p|_inf), and its coplanar reach where the light comes that close
+            // to T (the CPU twin's rule).
             precise double light_near = 2.0LF * P.epsilon.x * scale_hi + P.bounds.x;
             const bool light_touches = light_distance2 <= light_near * light_near * (1.0LF + 1e-9LF);
-            precise double margin_reach = 2.0LF * (light_touches ? P.epsilon.z : P.epsilon.y) * scale_hi;
+            precise double tie_reach = P.epsilon.y * max(scale_v, s_far);
+            precise double margin_reach = 2.0LF * max(light_touches ? P.epsilon.z * scale_hi : 0.0LF, tie_reach);
             const bool near = distance2 <= reach * reach * (1.0LF + 1e-9LF);
             all_exact = exact && (near || !(P.bounds.w > margin_reach));
             const dvec3 a = v0 - p, b = v1 - p, c = v2 - p;
@@ -496,7 +501,7 @@ void penumbraSbsTexelWork(const PenumbraSbsParams P, const uvec2 texel, const uv
             bits &= bits - 1u;
             ++tests;
             const dvec3 l = hard_texel ? P.center.xyz : penumbraSbsSamples[sample_base + 32u * w + bit].xyz;
-            if (penumbraAfhBlocks(v0, v1, v2, p, l, P.epsilon.x, 0.0LF)) m |= 1u << bit;
+            if (penumbraAfhBlocks(v0, v1, v2, p, l, P.epsilon.x, 0.0LF, P.center.w)) m |= 1u << bit;  // w: E
             if (bits == 0u) {
                 if (m != 0u && !hard_texel) atomicOr(penumbraSbsMasks[mask_base + w], m);
                 pending &= ~(1u << w);

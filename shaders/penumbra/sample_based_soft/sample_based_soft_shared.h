@@ -186,7 +186,8 @@ namespace penumbra::shared {  // C++: include penumbra/light_lut.hpp first (Penu
 // std140 == std430: the dvec4 members first (32-aligned), then uvec4s, then the LUT's block.
 // 7 dvec4 (224) + 4 uvec4 (64) + PenumbraLutParams (48) = 336 bytes.
 struct PenumbraSbsParams {
-    dvec4 center;       // xyz: LightFrame::center (world), w: 0
+    dvec4 center;       // xyz: LightFrame::center (world), w: the oracle's scene extent E capping
+                        // |s - p|_inf in its tolerance scale (> 0; +inf = uncapped)
     dvec4 rotation[3];  // LightFrame::rotation columns (local x, y, z), w: 0
     dvec4 scale;        // xyz: LightFrame::scale, w: the smallest semi-axis
     dvec4 bounds;       // x: light reach (max semi-axis * sqrt 3), y: |centre| + reach, z: plane budget

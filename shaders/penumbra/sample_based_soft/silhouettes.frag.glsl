@@ -56,7 +56,7 @@ void main() {
         const dvec3 p = dvec3(penumbraSampleListsPosition(slot));
         const double scale_v = max(penumbraSbsMaxAbs(v0 - p), max(penumbraSbsMaxAbs(v1 - p), penumbraSbsMaxAbs(v2 - p)));
         if (penumbraSbsCoplanarOpen(caster, p, scale_v, penumbraAfhPointTriangleDistance2(p, v0, v1, v2), light_distance2,
-                                    P.center.xyz, P.bounds.x, P.epsilon.x)) {
+                                    P.center.xyz, P.bounds.x, P.epsilon.x, P.center.w)) {
             atomicOr(penumbraSbsMarks[index], 2u);
             return;
         }
