@@ -243,9 +243,9 @@ void check(const Case& k, Kind kind, bool exact, Tally& tally) {
     const glm::dvec3 ab = b - a, ac = c - a, ap = p - a, al = l - a;
     const double nx = ab.y * ac.z - ab.z * ac.y, ny = ab.z * ac.x - ab.x * ac.z, nz = ab.x * ac.y - ab.y * ac.x;
     const double dp = nx * ap.x + ny * ap.y + nz * ap.z, dl = nx * al.x + ny * al.y + nz * al.z;
-    const glm::dvec3 la = a - l, lb = b - l, lc = c - l, lp = p - l;
-    const double e[3] = {penumbra::detail::afhDet(la, lb, lp), penumbra::detail::afhDet(lb, lc, lp),
-                         penumbra::detail::afhDet(lc, la, lp)};
+    const glm::dvec3 bp = p - b, cp = p - c, lp = p - l;  // e_i taken at p, as afhBlocks
+    const double e[3] = {penumbra::detail::afhDet(ap, bp, lp), penumbra::detail::afhDet(bp, cp, lp),
+                         penumbra::detail::afhDet(cp, ap, lp)};
     uint64_t bad = 0;
     if (t.sp != 0) bad += sign(dp) != t.sp;
     if (t.sl != 0) bad += sign(dl) != t.sl;

@@ -23,7 +23,9 @@
 //   (2) not (dp^2 <= (eps scale)^2 |n|^2 and dist(p, T)^2 <= (eps scale)^2)   (coplanar rule, p);
 //   (3) the same for l;
 //   (4) not (offset > 0 and dp^2 <= offset^2 |n|^2);
-//   (5) e_i = det(v_i - l, v_i+1 - l, p - l) all >= 0 or all <= 0, not all 0;
+//   (5) e_i = det(v_i - l, v_i+1 - l, p - l) all >= 0 or all <= 0, not all 0, evaluated as
+//       det(p - v_i, p - v_i+1, p - l) (relative to a far light the cross products cancel
+//       ~|l|^2: wrong double signs a scene away from an edge at |l| ~ 1e7, issue 41);
 // hold (its early returns all return false). The filter certifies conjuncts: one certainly false
 // -> False, all certainly true -> True, otherwise Uncertain (then the double test runs).
 //
@@ -34,7 +36,7 @@
 // |x_f| > B >= 2 gamma_8 P (+ terms below) then X, x_f and x_d have the same nonzero sign: the
 // double comparisons (< 0, > 0, >= 0, == 0) all come out as the float ones say.
 //   dp, dl: P = Q.|ap| and Q.|al|, Q_i = |ab_j||ac_k| + |ab_k||ac_j| (the permanent exactly);
-//   e_i:    P <= 2 |u|inf |v|inf |w|1 (cheaper, at most 3x looser).
+//   e_i:    P <= 2 |u|inf |v|inf |w|1 (cheaper, at most 3x looser), u, v = p - v_i, w = p - l.
 //   B = kRel P + A, kRel = 1.92e-6 >= 16 u (1 + 2^-8) (both paths, P's own rounding, slack).
 // Coplanar rule (2)/(3): certified not to fire when |dp_f| > B + T, T >= eps scale |n|2 including
 // the double path's rounding of tol, threshold and squares (|n|2 <= |n|1, |n_d|1 <= |n_f|1 +
@@ -50,7 +52,7 @@
 // Directional lights: l_f = fl(p + fl(light * reach)) differs from the double path's l_d by at
 // most l_error = 2.5e-7 (|t|inf + |l_f|inf) + 1e-36 per coordinate (both within 2u(1+5u) of the
 // exact point); magnitudes are grown by l_error, dl moves by at most sum(Q) l_error and e_i,
-// affine in l (e_0 = (a - l).((b - a) x (p - a))), by at most 24 m^2 l_error.
+// affine in l (e_0 = ((p - a) x (p - b)).(p - l)), by at most 6 m^2 l_error (24 m^2 charged).
 //
 // Assumptions (GLSL 4.50 §4.7.1 "Range and Precision", = ARB_shader_precision): float a + b,
 // a - b, a * b correctly rounded in an undefined rounding mode -> unit u = 2^-23 (one ulp, any
@@ -167,11 +169,11 @@ inline BlockerFilterState blockerFilter(const glm::vec3& a, const glm::vec3& b, 
     t.sl = sl;
     if (sp * sl > 0) return BlockerFilterState::False;
 
-    const glm::vec3 la = a - l, lb = b - l, lc = c - l, lp = p - l;
-    const float e0 = blockerFilterDet(la, lb, lp), e1 = blockerFilterDet(lb, lc, lp), e2 = blockerFilterDet(lc, la, lp);
-    const float ma = blockerFilterMaxAbs(la) + l_error;
-    const float mb = blockerFilterMaxAbs(lb) + l_error;
-    const float mc = blockerFilterMaxAbs(lc) + l_error;
+    const glm::vec3 bp = p - b, cp = p - c, lp = p - l;  // e_i taken at p, as the double test
+    const float e0 = blockerFilterDet(ap, bp, lp), e1 = blockerFilterDet(bp, cp, lp), e2 = blockerFilterDet(cp, ap, lp);
+    const float ma = blockerFilterMaxAbs(ap);
+    const float mb = blockerFilterMaxAbs(bp);
+    const float mc = blockerFilterMaxAbs(cp);
     const glm::vec3 mlp = glm::abs(lp);
     const float lp1 = ((mlp.x + mlp.y) + mlp.z) + mul(3.0f, l_error);
     const float m_edge = std::max(std::max(ma, mb), std::max(mc, std::max(mlp.x, std::max(mlp.y, mlp.z)) + l_error));
@@ -188,7 +190,6 @@ inline BlockerFilterState blockerFilter(const glm::vec3& a, const glm::vec3& b, 
     if (std::min(s0, std::min(s1, s2)) < 0 && std::max(s0, std::max(s1, s2)) > 0) return BlockerFilterState::False;
     if (sp == 0 || sl == 0 || s0 == 0 || s1 == 0 || s2 == 0) return BlockerFilterState::Uncertain;
 
-    const glm::vec3 bp = p - b, cp = p - c;
     const float extent_up = static_cast<float>(std::min(scene_extent, kBlockerFilterExtentClamp)) + kBlockerFilterTiny;
     const float segment = std::min(std::max(mlp.x, std::max(mlp.y, mlp.z)) + l_error, extent_up);
     const float scale = std::max(std::max(blockerFilterMaxAbs(ap), blockerFilterMaxAbs(bp)),

@@ -209,6 +209,10 @@ inline glm::mat4 lightViewProjectionForBounds(const glm::vec4& light, const glm:
     const float radius = std::max(0.5f * glm::length(hi - lo), 1e-6f);
     if (light.w != 0.0f) {
         const glm::vec3 eye(light);
+        // Squared lengths of the frustum's float maths overflow near 1.8e19: refuse rather than NaN.
+        const double far = glm::length(glm::dvec3(center) - glm::dvec3(eye));
+        PENUMBRA_CHECK(far <= 1e18, "penumbra::lightViewProjectionForBounds: the point light (", eye.x, ", ", eye.y, ", ",
+                       eye.z, ") is ", far, " from the box centre, beyond the limit of 1e18; use a directional light");
         const float distance = glm::length(center - eye);
         PENUMBRA_CHECK(distance > 1e-6f * radius, "penumbra::lightViewProjectionForBounds: the point light is at the box centre");
         // Cone axis: the mean of the unit vectors to the corners (near the minimal cone's axis; the
@@ -226,8 +230,9 @@ inline glm::mat4 lightViewProjectionForBounds(const glm::vec4& light, const glm:
             const glm::vec3 corner((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
             const glm::vec3 v = corner - eye;
             const float depth = glm::dot(v, dir);
-            const float length = glm::length(v);
-            const float angle = depth > 0.0f ? std::acos(std::min(1.0f, depth / length)) : 3.2f;
+            // atan2, not acos(depth / length): acos near 1 in float resolves no angle below ~3e-4
+            // rad, so a box 1e4 away came out narrower than the 1e-4 floor and lost its corners.
+            const float angle = depth > 0.0f ? std::atan2(glm::length(glm::cross(v, dir)), depth) : 3.2f;
             max_angle = std::max(max_angle, angle);
             min_depth = std::min(min_depth, depth);
             max_depth = std::max(max_depth, depth);
@@ -248,7 +253,9 @@ inline glm::mat4 lightViewProjectionForBounds(const glm::vec4& light, const glm:
         // The cone's half-angle bounds every corner's angle; the square frustum's half-angle per
         // axis must reach it: tan(fov/2) = tan(max_angle) (a slight superset at the diagonals).
         const float fov = 2.0f * std::atan(std::tan(max_angle) * 1.01f);
-        return glm::perspective(fov, 1.0f, near_plane, max_depth * 1.01f) * glm::lookAt(eye, eye + dir, up);
+        // Aim at a point near the box, not eye + dir: from ~1e7 eye + dir rounds to (almost) eye in
+        // float, so the axis was quantised, and NaN from 1e8 (eye + dir == eye).
+        return glm::perspective(fov, 1.0f, near_plane, max_depth * 1.01f) * glm::lookAt(eye, eye + dir * distance, up);
     }
     const glm::vec3 dir = glm::normalize(glm::vec3(light));  // towards the light
     PENUMBRA_CHECK(std::isfinite(dir.x), "penumbra::lightViewProjectionForBounds: zero light direction");
@@ -387,8 +394,9 @@ bool afhBlocks(const glm::tvec3<Real>& a, const glm::tvec3<Real>& b, const glm::
     if (mulRounded(dp, dp) <= threshold && detail::pointTriangleDistance2<Real>(p, a, b, c) <= tol2) return false;
     if (mulRounded(dl, dl) <= threshold && detail::pointTriangleDistance2<Real>(l, a, b, c) <= tol2) return false;
     if (offset > 0 && mulRounded(dp, dp) <= mulRounded(mulRounded(offset, offset), nn)) return false;
-    const glm::tvec3<Real> la = a - l, lb = b - l, lc = c - l, lp = p - l;
-    const Real e0 = detail::afhDet(la, lb, lp), e1 = detail::afhDet(lb, lc, lp), e2 = detail::afhDet(lc, la, lp);
+    // det(a - l, b - l, p - l) taken at p (blocker_test.glsl): no |l|^2 cancellation for far lights.
+    const glm::tvec3<Real> bp = p - b, cp = p - c, lp = p - l;
+    const Real e0 = detail::afhDet(ap, bp, lp), e1 = detail::afhDet(bp, cp, lp), e2 = detail::afhDet(cp, ap, lp);
     const bool nonnegative = e0 >= 0 && e1 >= 0 && e2 >= 0;
     const bool nonpositive = e0 <= 0 && e1 <= 0 && e2 <= 0;
     const bool zero = e0 == 0 && e1 == 0 && e2 == 0;

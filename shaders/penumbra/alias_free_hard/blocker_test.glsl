@@ -13,7 +13,8 @@
 //       bias, while a grazing crossing of a neighbour near the terminator still counts;
 //   p and l strictly on opposite sides (and |d_p| > offset * |n|, the optional sample offset);
 //   edge planes through l: e_i = det(v_i - l, v_i+1 - l, p - l) all >= 0 or all <= 0, not all 0
-//       (the line from l through p meets the closed triangle).
+//       (the line from l through p meets the closed triangle), evaluated as det(p - v_i,
+//       p - v_i+1, p - l) so that a far light costs no precision.
 // With both: the segment crosses the plane strictly between p and l, inside the triangle.
 //
 // PENUMBRA_AFH_EXACT 1 (default): double precision, `precise` so no FMA contraction changes a
@@ -114,13 +115,15 @@ bool penumbraAfhBlocks(penumbraAfhVec3 a, penumbraAfhVec3 b, penumbraAfhVec3 c, 
     if (dp * dp <= threshold && penumbraAfhPointTriangleDistance2(p, a, b, c) <= tol * tol) return false;
     if (dl * dl <= threshold && penumbraAfhPointTriangleDistance2(l, a, b, c) <= tol * tol) return false;
     if (offset > 0.0 && dp * dp <= offset * offset * nn) return false;
-    precise penumbraAfhVec3 la = a - l;
-    precise penumbraAfhVec3 lb = b - l;
-    precise penumbraAfhVec3 lc = c - l;
+    // e_0 = det(a - l, b - l, p - l) = det(p - a, p - b, p - l), taken at p: relative to a far
+    // light the cross products cancel ~|l|^2 (wrong signs a scene away from an edge at 1e7);
+    // relative to p the error is ~u |l| |v - p|^2, a rounding of the value's own terms.
+    precise penumbraAfhVec3 bp = p - b;
+    precise penumbraAfhVec3 cp = p - c;
     precise penumbraAfhVec3 lp = p - l;
-    penumbraAfhReal e0 = penumbraAfhDet(la, lb, lp);
-    penumbraAfhReal e1 = penumbraAfhDet(lb, lc, lp);
-    penumbraAfhReal e2 = penumbraAfhDet(lc, la, lp);
+    penumbraAfhReal e0 = penumbraAfhDet(ap, bp, lp);
+    penumbraAfhReal e1 = penumbraAfhDet(bp, cp, lp);
+    penumbraAfhReal e2 = penumbraAfhDet(cp, ap, lp);
     bool all_nonnegative = e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0;
     bool all_nonpositive = e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0;
     bool all_zero = e0 == 0.0 && e1 == 0.0 && e2 == 0.0;
@@ -244,22 +247,23 @@ int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_erro
     // Same side, certainly: the cheapest and by far the most common decision.
     if (sp * sl > 0) return PENUMBRA_AFH_FILTER_FALSE;
 
-    // Edge planes through the light: e_i = det(v_i - l, v_i+1 - l, p - l).
-    precise vec3 la = a - l;
-    precise vec3 lb = b - l;
-    precise vec3 lc = c - l;
+    // Edge planes through the light, taken at p as the double test does: e_i = det(p - v_i,
+    // p - v_i+1, p - l); only p - l carries l_error.
+    precise vec3 bp = p - b;
+    precise vec3 cp = p - c;
     precise vec3 lp = p - l;
-    precise float e0 = penumbraAfhFilterDet(la, lb, lp);
-    precise float e1 = penumbraAfhFilterDet(lb, lc, lp);
-    precise float e2 = penumbraAfhFilterDet(lc, la, lp);
-    precise float ma = penumbraAfhFilterMaxAbs(la) + l_error;
-    precise float mb = penumbraAfhFilterMaxAbs(lb) + l_error;
-    precise float mc = penumbraAfhFilterMaxAbs(lc) + l_error;
+    precise float e0 = penumbraAfhFilterDet(ap, bp, lp);
+    precise float e1 = penumbraAfhFilterDet(bp, cp, lp);
+    precise float e2 = penumbraAfhFilterDet(cp, ap, lp);
+    precise float ma = penumbraAfhFilterMaxAbs(ap);
+    precise float mb = penumbraAfhFilterMaxAbs(bp);
+    precise float mc = penumbraAfhFilterMaxAbs(cp);
     precise vec3 mlp = abs(lp);
     precise float lp1 = (mlp.x + mlp.y + mlp.z) + 3.0 * l_error;
     precise float m_edge = max(max(ma, mb), max(mc, max(mlp.x, max(mlp.y, mlp.z)) + l_error));
     if (!(m_edge <= penumbraAfhFilterMaxDifference)) return PENUMBRA_AFH_FILTER_UNCERTAIN;
-    // A moved light point moves e_i by at most 24 m^2 l_error (e_i is affine in l).
+    // A moved light point moves e_i by at most |(p - v_i) x (p - v_i+1)|1 l_error <= 6 m^2 l_error
+    // (e_i is affine in l); 24 m^2 kept.
     precise float abs_edge = penumbraAfhFilterAbs * ((1.0 + m_edge) * (1.0 + m_edge)) +
                              (24.2 * (m_edge * m_edge)) * l_error;
     precise float be0 = penumbraAfhFilterEdgeRel * ((ma * mb) * lp1) + abs_edge;
@@ -275,8 +279,6 @@ int penumbraAfhBlocksFilter(vec3 a, vec3 b, vec3 c, vec3 p, vec3 l, float l_erro
     // Opposite sides and inside, certainly. The coplanar rule cannot fire when |dp| (and |dl|)
     // certainly exceed eps * scale * |n|2 (|n|2 <= |n|1): the distance to the triangle is at
     // least the distance to its plane. E is converted here, where few pairs arrive (one fp64 op).
-    precise vec3 bp = p - b;
-    precise vec3 cp = p - c;
     precise float extent_up = float(min(scene_extent, penumbraAfhFilterExtentClamp)) + penumbraAfhFilterTiny;
     precise float segment = min(max(mlp.x, max(mlp.y, mlp.z)) + l_error, extent_up);
     precise float scale = max(max(penumbraAfhFilterMaxAbs(ap), penumbraAfhFilterMaxAbs(bp)),
