@@ -131,10 +131,15 @@ soft_shadows_hostile(hpc_1x1 cpu 0 "\"view_samples\":1,.*\"mismatched_bits\":0,"
                      --mode hpc --width 1 --height 1 --samples 32 --reference --json --out ${hostile_out}/hpc_1x1.png)
 soft_shadows_hostile(soft_tiny_radius egl 0 "\"exact_by_brute\":true.*\"mismatched_bits\":0,.*every light sample is tested"
                      ${soft_small} --light-radius 1e-6 --reference --json --out ${hostile_out}/soft_tiny_radius.png)
-soft_shadows_hostile(soft_far_light egl 0 "\"mean_visible_fraction\":0\\.[0-9]+,.*\"exact_by_brute\":true.*\"mismatched_bits\":0,"
-                     ${soft_small} --grid 16 --light-pos 1e6,1e6,1e6 --light-radius 1e4 --reference --json --out ${hostile_out}/soft_far_light.png)
+soft_shadows_hostile(soft_far_light egl 0 "\"mean_visible_fraction\":0\\.[0-9]+,.*\"mismatched_bits\":0,"
+                     --mode soft ${small} --samples 32 --lut-res 16 --grid 16 --light-pos 1e6,1e6,1e6 --light-radius 1e4
+                     --reference --json --out ${hostile_out}/soft_far_light.png)
 soft_shadows_hostile(hard_far_light egl 0 "\"shadowed\":[1-9][0-9]*,.*\"reference\":\\{\"samples\":[0-9]+,\"mismatched\":0"
                      --mode hard ${small} --light-pos 1e5,1e5,1e5 --reference --json --out ${hostile_out}/hard_far_light.png)
+soft_shadows_hostile(hard_farther_light egl 0 "\"shadowed\":[1-9][0-9]*,.*\"reference\":\\{\"samples\":[0-9]+,\"mismatched\":0"
+                     --mode hard ${small} --light-pos 3e8,1e9,-2e8 --reference --json --out ${hostile_out}/hard_farther_light.png)
+soft_shadows_hostile(hard_light_past_1e18 egl fail "--light-pos .*cannot light the view samples from there: .*beyond the limit of 1e18"
+                     --mode hard ${small} --light-pos 1e20,1e20,1e20 --out ${x})
 soft_shadows_hostile(reference_far_light cpu 0 "\"mean_visible_fraction\":0\\.[0-9]+,"
                      ${small} --samples 8 --light-pos 1e10,1e10,1e10 --light-radius 1e8 --json --out ${hostile_out}/reference_far_light.png)
 soft_shadows_hostile(width_plus_sign cpu 0 "\"width\":32,\"height\":24"

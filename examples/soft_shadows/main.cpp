@@ -1808,6 +1808,7 @@ int runSoft(const Args& args, const penumbra::scene::Scene& scene, const penumbr
         // The coplanar rule of the hard pipeline: above float rounding of surface points (1e-7) or
         // of positions rebuilt from a 32-bit depth buffer (kDepthCoplanarEpsilon).
         o.oracle.coplanar_epsilon = v.depth_input ? kDepthCoplanarEpsilon : 1e-7;
+        o.scene_extent = oracle.sceneExtent();  // the oracle's E: far lights keep their shadows
         o.skips.empty_blocks = !all_off && args.skip("empty");
         o.skips.closed_casters = !all_off && args.skip("cull");
         o.skips.plane_cut = !all_off && args.skip("cut");
