@@ -65,6 +65,11 @@
 //                                    with every influence region drawn (_drawn, coverage_texels = 0),
 //                                    all four interleaved: coverage_speedup = ms_drawn / ms,
 //                                    coverage_speedup_lut = ms_lut_drawn / ms_lut.
+//   BM_SoftShadowsCompute            exact and lut at N = 256 with the compute light pass
+//                                    (SoftLightPass::Compute: casters as buffers, no draw) and the
+//                                    raster one (_raster, the default options), all four
+//                                    interleaved: compute_speedup = ms_raster / ms,
+//                                    compute_speedup_lut = ms_lut_raster / ms_lut.
 //   BM_SoftShadowsRadius/<percent>   exact, N = 256, the light radius at 10 ... 400 % of the
 //                                    scene's (sintorn2008 Fig. 12).
 //   BM_SoftShadowsTriangles/<tess>   exact, N = 128, torusKnot(tess): 2 tess^2 + 2 triangles
@@ -366,14 +371,17 @@ struct Ours {
     const View& v;
     const Lut& l;
     SoftMode mode;
+    penumbra::SoftLightPass light_pass;
     penumbra::SampleBasedSoftShadows pipeline;
     penumbra::SampleBufferInput input;
     penumbra::BufferRange table;
     penumbra::SampleBasedSoftShadows::DrawCasters draw;
     bool ok = true;
 
-    static penumbra::SampleBasedSoftGpuOptions options(SoftMode mode, bool count_work, uint32_t coverage_texels) {
+    static penumbra::SampleBasedSoftGpuOptions options(SoftMode mode, bool count_work, uint32_t coverage_texels,
+                                                       penumbra::SoftLightPass light_pass) {
         penumbra::SampleBasedSoftGpuOptions o;
+        o.light_pass = light_pass;
         o.coverage_texels = coverage_texels;
         o.mode = mode;
         o.grid_width = o.grid_height = sizes().grid;
@@ -386,20 +394,29 @@ struct Ours {
         const uint32_t per_view = std::min<uint32_t>(65535u * 256u, sizes().width * sizes().height * 128u);
         o.deferred_pairs = std::max<uint32_t>(o.deferred_pairs, per_view);
         o.deferred_fragments = std::min<uint32_t>(65535u * 256u, 2 * per_view);
-        o.deferred_triangles = 1u << 18;
+        o.deferred_triangles = light_pass == penumbra::SoftLightPass::Compute ? 0u : 1u << 18;  // Compute: its own default
         return o;
     }
     Ours(const View& view, const LightConfig& c, const Lut& lut, SoftMode m, bool count_work,
-         uint32_t coverage_texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels)
-        : v(view), l(lut), mode(m),
-          pipeline(options(m, count_work, coverage_texels), c.sets, m == SoftMode::Brute ? nullptr : &lut.setup, c.influence, c.view_projection),
+         uint32_t coverage_texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels,
+         penumbra::SoftLightPass pass = penumbra::SoftLightPass::Raster)
+        : v(view), l(lut), mode(m), light_pass(pass),
+          pipeline(options(m, count_work, coverage_texels, pass), c.sets, m == SoftMode::Brute ? nullptr : &lut.setup, c.influence,
+                   c.view_projection),
           input(view.input()),
           table(m == SoftMode::Brute ? penumbra::BufferRange{} : penumbra::BufferRange{lut.table.id(), 0, lut.table.size()}),
           draw([&view](penumbra::CasterClass c) { view.gpu->drawClass(c == penumbra::CasterClass::Closed); }) {
         pipeline.reserve(v.count);
         pipeline.validate(input, v.count, table);
     }
-    void run() { ok &= pipeline.run(input, v.count, table, draw) == penumbra::Status::Ok; }
+    void run() {
+        if (light_pass == penumbra::SoftLightPass::Compute) {
+            const std::vector<penumbra::CasterBuffer>& casters = v.gpu->casterBuffers();
+            ok &= pipeline.run(input, v.count, table, casters.data(), static_cast<uint32_t>(casters.size())) == penumbra::Status::Ok;
+        } else {
+            ok &= pipeline.run(input, v.count, table, draw) == penumbra::Status::Ok;
+        }
+    }
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -609,6 +626,33 @@ void BM_SoftShadowsCoverage(benchmark::State& state) {
     }
 }
 
+/// SoftLightPass::Compute against Raster (each with its defaults: the coverage pass for small
+/// regions), exact and lut, interleaved.
+void BM_SoftShadowsCompute(benchmark::State& state) {
+    if (sizesRejected(state)) return;
+    penumbra::bench::glContext();
+    try {
+        const uint32_t tessellation = sizes().tessellation;
+        const View& v = view(tessellation);
+        const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
+        const uint32_t texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels;
+        Ours compute(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false, texels, penumbra::SoftLightPass::Compute);
+        Ours raster(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
+        Ours compute_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false, texels, penumbra::SoftLightPass::Compute);
+        Ours raster_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
+        const std::vector<double> ms = timeOurs(
+            state, {{"", &compute}, {"raster", &raster}, {"lut", &compute_lut}, {"lut_raster", &raster_lut}},
+            {&c.truth, &c.truth, &c.truth, &c.truth});
+        if (ms.empty()) return;
+        state.counters["compute_speedup"] = ratio(ms[1], ms[0]);
+        state.counters["compute_speedup_lut"] = ratio(ms[3], ms[2]);
+        setScene(state, v, kBaselineSamples);
+        leaveNoBindings();
+    } catch (const std::exception& e) {
+        state.SkipWithError(e.what());
+    }
+}
+
 /// sintorn2008 §5's alternative: one shadow map per light sample, averaged; ours timed with it.
 void BM_ShadowMapsAveraged(benchmark::State& state, uint32_t map_size) {
     if (sizesRejected(state)) return;
@@ -747,6 +791,7 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
     }
     configure(benchmark::RegisterBenchmark("BM_SoftShadowsNScaling", BM_SoftShadowsNScaling));
     configure(benchmark::RegisterBenchmark("BM_SoftShadowsCoverage", BM_SoftShadowsCoverage));
+    configure(benchmark::RegisterBenchmark("BM_SoftShadowsCompute", BM_SoftShadowsCompute));
     for (const uint32_t percent : radiusPercents()) {
         const std::string name = "BM_SoftShadowsRadius/" + std::to_string(percent);
         configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) {

@@ -14,15 +14,18 @@
 #include <penumbra/pipelines/alias_free_hard.hpp>
 #include <penumbra/pipelines/silhouette_marks.hpp>
 #include <penumbra/scene/gl_scene.hpp>
+#include <penumbra/scene/obj.hpp>
 #include <penumbra/scene/scene.hpp>
 
 #include "support/gl_test_support.hpp"
 #include "support/gl_world.hpp"
+#include "support/source_paths.hpp"
 #include "support/test_support.hpp"
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -1395,4 +1398,258 @@ TEST_CASE("Deferred pairs: a pair's entry unpacks to its triangle slot, list-blo
     }
     CHECK(mismatched == 0);
     penumbra::gl::checkErrors("pair pack test");
+}
+
+namespace {
+
+/// SoftLightPass::Compute's masks (and frame) for the world's casters as buffers.
+std::vector<uint32_t> runComputeFrame(const penumbra::SampleBasedSoftGpuOptions& options, const penumbra::test::GlWorld& w,
+                                      const penumbra::test::GlSoftLight& soft, const std::vector<penumbra::CasterBuffer>& casters,
+                                      bool depth, const penumbra::BufferRange& table, penumbra::SampleBasedSoftFrame* frame) {
+    const bool brute = options.mode == penumbra::SoftMode::Brute;
+    penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence, w.light.view_projection);
+    pipeline.reserve(w.samples());
+    pipeline.validateCasters(casters.data(), static_cast<uint32_t>(casters.size()));
+    const Status s = depth ? pipeline.run(w.depthInput(), table, casters.data(), static_cast<uint32_t>(casters.size()))
+                           : pipeline.run(w.bufferInput(), w.samples(), table, casters.data(), static_cast<uint32_t>(casters.size()));
+    REQUIRE(s == Status::Ok);
+    *frame = pipeline.readFrame();
+    penumbra::gl::checkErrors("compute light pass");
+    return pipeline.readMasks();
+}
+
+}  // namespace
+
+namespace {
+
+// SoftLightPass::Compute (casters as buffers, no draw) against SoftLightPass::Raster (the
+// callback; every region drawn: coverage_texels = 0), closed casters' second pass included,
+// several list blocks: Exact and Brute word for word; Lut reported. Also small capacities: few
+// triangle slots (the host runs the deferred passes between chunks), a pairs buffer that
+// overflows into the fragments buffer, and both overflowing (the coverage pass works the pairs
+// itself). `full`: every mode, input and capacity on every scene; else Exact on depth input with
+// every capacity on the first scene, the default capacities elsewhere, G-buffer input and Lut on
+// the first, Brute with both overflowing on columns.
+void checkComputeAgainstRaster(const std::vector<std::string>& names, bool full) {
+    penumbra::test::context();
+    struct Capacity {
+        uint32_t pairs, triangles, fragments;
+    };
+    for (const std::string& name : names) {
+        const bool first = name == names.front();
+        const bool obj = name.size() > 4 && name.compare(name.size() - 4, 4, ".obj") == 0;
+        const penumbra::test::GlWorld w(obj ? penumbra::scene::loadObj(penumbra::test::sharedScenesDir() + "/" + name)
+                                            : penumbra::scene::builtin(name));
+        const penumbra::test::GlSoftLight soft(w, 64, 128, 128);
+        const std::vector<penumbra::CasterBuffer>& casters = w.gpu.casterBuffers();
+        for (const penumbra::SoftMode mode : {penumbra::SoftMode::Exact, penumbra::SoftMode::Lut, penumbra::SoftMode::Brute}) {
+            const bool brute = mode == penumbra::SoftMode::Brute;
+            if (brute && name != "columns") continue;  // Exact's all-exact pairs' code; slow
+            if (!full && mode == penumbra::SoftMode::Lut && !first) continue;
+            const std::string mode_name = penumbra::softModeName(mode);
+            const penumbra::BufferRange table = brute ? penumbra::BufferRange{} : soft.table();
+            for (const bool depth : {true, false}) {
+                if (!depth && (mode != penumbra::SoftMode::Exact || (!full && !first))) continue;
+                penumbra::SampleBasedSoftGpuOptions options;
+                options.mode = mode;
+                options.grid_width = options.grid_height = 128;
+                options.list_block = 8;
+                options.skips.closed_casters = true;
+                options.coverage_texels = 0;
+                penumbra::SampleBasedSoftFrame raster;
+                std::vector<uint32_t> raster_masks;
+                {
+                    penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, brute ? nullptr : &soft.lut, soft.influence,
+                                                              w.light.view_projection);
+                    pipeline.reserve(w.samples());
+                    const auto draw = [&](penumbra::CasterClass c) { w.drawClass(c); };
+                    REQUIRE((depth ? pipeline.run(w.depthInput(), table, draw) : pipeline.run(w.bufferInput(), w.samples(), table, draw)) ==
+                            Status::Ok);
+                    raster = pipeline.readFrame();
+                    raster_masks = pipeline.readMasks();
+                }
+                CHECK(std::count_if(raster_masks.begin(), raster_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
+                options.light_pass = penumbra::SoftLightPass::Compute;
+                for (const Capacity capacity : {Capacity{0, 0, 0}, Capacity{0, 64, 0}, Capacity{64, 0, 1u << 20}, Capacity{64, 0, 16}}) {
+                    if (!depth && capacity.pairs + capacity.triangles != 0) continue;
+                    const bool all = capacity.pairs + capacity.triangles + capacity.fragments == 0;
+                    if (!full && !all && !(first && mode == penumbra::SoftMode::Exact) && !(brute && capacity.fragments == 16))
+                        continue;
+                    CAPTURE(name);
+                    CAPTURE(mode_name);
+                    CAPTURE(depth);
+                    CAPTURE(capacity.pairs);
+                    CAPTURE(capacity.triangles);
+                    CAPTURE(capacity.fragments);
+                    penumbra::SampleBasedSoftGpuOptions o = options;
+                    if (capacity.pairs) o.deferred_pairs = capacity.pairs;
+                    o.deferred_triangles = capacity.triangles;
+                    o.deferred_fragments = capacity.fragments;
+                    penumbra::SampleBasedSoftFrame computed;
+                    const std::vector<uint32_t> masks = runComputeFrame(o, w, soft, casters, depth, table, &computed);
+                    uint64_t moved = 0;
+                    for (size_t i = 0; i < raster_masks.size(); ++i) moved += uint64_t(__builtin_popcount(raster_masks[i] ^ masks[i]));
+                    MESSAGE(name, " ", mode_name, std::string(depth ? " depth" : " g-buffer"), ", pairs ", o.deferred_pairs, " / slots ",
+                            capacity.triangles, " / fragments ", capacity.fragments, ": fragments ", computed.fragments, " (raster ",
+                            raster.fragments, "), pairs ", computed.pairs, " (", raster.pairs, "), fallbacks ",
+                            computed.deferral_fallbacks, ", bits moved ", moved);
+                    if (mode != penumbra::SoftMode::Lut) CHECK(masks == raster_masks);
+                    if (mode == penumbra::SoftMode::Lut) CHECK(moved <= raster_masks.size() * 32 / 1000);
+                    CHECK(computed.triangles_culled == raster.triangles_culled);
+                    CHECK(computed.overflow == raster.overflow);
+                    CHECK(computed.caster_indices_out_of_range == 0);
+                    // The coverage pass's visits of non-empty blocks: every one the rasteriser
+                    // shades, a few more (it neither visits nor counts empty texels).
+                    const uint64_t shaded = raster.fragments - raster.fragments_skipped;
+                    CHECK(computed.fragments_skipped == 0);
+                    CHECK(computed.fragments >= shaded);
+                    CHECK(computed.fragments <= shaded + shaded / 20);
+                    CHECK((computed.deferral_fallbacks != 0) == (capacity.fragments == 16));
+                }
+            }
+        }
+    }
+}
+
+/// The shared OBJ scenes present (file names; none when ../shared is absent).
+std::vector<std::string> sharedObjNames() {
+    std::vector<std::string> names;
+    const std::string dir = penumbra::test::sharedScenesDir();
+    if (!std::filesystem::is_directory(dir)) {
+        MESSAGE("skipping the shared OBJ scenes: ", dir, " is absent");
+        return names;
+    }
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+        if (e.path().extension() == ".obj") names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+}  // namespace
+
+TEST_CASE("Compute light pass: the raster pass's bits, both inputs, small capacities (torus knot, columns, one OBJ)") {
+    std::vector<std::string> names = {"torus_knot", "columns"};
+    const std::vector<std::string> objs = sharedObjNames();
+    if (!objs.empty()) names.push_back(objs.front());
+    checkComputeAgainstRaster(names, false);
+}
+
+TEST_SUITE("stress") {
+    TEST_CASE("Compute light pass (stress): the raster pass's bits on every built-in and shared scene, every mode, input and capacity") {
+        std::vector<std::string> names = penumbra::scene::builtinNames();
+        for (const std::string& obj : sharedObjNames()) names.push_back(obj);
+        checkComputeAgainstRaster(names, true);
+    }
+}
+
+TEST_CASE("Compute light pass: misuse returns a Status, bad indices are counted, bad setup throws") {
+    penumbra::test::context();
+    const penumbra::test::GlWorld w(penumbra::scene::builtin("columns"));
+    const penumbra::test::GlSoftLight soft(w, 64, 64, 32);
+    const std::vector<penumbra::CasterBuffer>& casters = w.gpu.casterBuffers();
+    penumbra::SampleBasedSoftGpuOptions options;
+    options.grid_width = options.grid_height = 64;
+    options.light_pass = penumbra::SoftLightPass::Compute;
+    {
+        penumbra::SampleBasedSoftGpuOptions bad = options;
+        bad.skips.silhouettes = true;
+        CHECK_THROWS_WITH_AS(penumbra::SampleBasedSoftShadows(bad, soft.sets, &soft.lut, soft.influence, w.light.view_projection),
+                             doctest::Contains("skips.silhouettes"), penumbra::Error);
+        bad = options;
+        bad.deferred_pairs = 0;
+        CHECK_THROWS_WITH_AS(penumbra::SampleBasedSoftShadows(bad, soft.sets, &soft.lut, soft.influence, w.light.view_projection),
+                             doctest::Contains("deferred_pairs > 0"), penumbra::Error);
+    }
+    penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+    pipeline.reserve(w.samples());
+    const penumbra::SampleDepthInput input = w.depthInput();
+    const auto expect = [&](const penumbra::CasterBuffer& c, Status status) {
+        CAPTURE(c.stride);
+        CAPTURE(c.triangles);
+        CHECK(pipeline.run(input, soft.table(), &c, 1) == status);
+    };
+    const penumbra::CasterBuffer good = casters.front();
+    penumbra::CasterBuffer c = good;
+    c.stride = 10;
+#ifdef NDEBUG  // misuse asserts in debug builds
+    expect(c, Status::InvalidArgument);
+#endif
+    CHECK_THROWS_WITH_AS(pipeline.validateCasters(&c, 1), doctest::Contains("stride 10"), penumbra::Error);
+#ifdef NDEBUG
+    c = good;
+    c.indices.size = 12ull * c.triangles - 4;
+    expect(c, Status::RangeTooSmall);
+    c = good;
+    c.indices = {};  // non-indexed: 3 vertices a triangle, more than the buffer holds
+    c.triangles = static_cast<uint32_t>(w.gpu.positions().size());
+    expect(c, Status::RangeTooSmall);
+    c = good;
+    c.positions.offset = 4;
+    expect(c, Status::Misaligned);
+    CHECK(pipeline.run(input, soft.table(), nullptr, 1) == Status::InvalidArgument);
+    CHECK(pipeline.run(input, soft.table(), [&](penumbra::CasterClass k) { w.drawClass(k); }) == Status::InvalidArgument);
+#else
+    (void)expect;
+#endif
+    // An index past the positions: the triangle casts nothing and is counted, once per frame.
+    std::vector<uint32_t> indices = w.gpu.indices();
+    indices[4] = 0x7FFFFFFFu;
+    const penumbra::gl::Buffer bad_indices = penumbra::gl::Buffer::fromVector(indices);
+    c = good;
+    c.indices = {bad_indices.id(), 0, bad_indices.size()};
+    c.triangles = static_cast<uint32_t>(indices.size() / 3);
+    c.caster_class = penumbra::CasterClass::Open;
+    REQUIRE(pipeline.run(input, soft.table(), &c, 1) == Status::Ok);
+    CHECK(pipeline.readFrame().caster_indices_out_of_range == 1);
+    penumbra::gl::checkErrors("compute light pass misuse");
+    // And the raster pipeline refuses casters as buffers.
+    options.light_pass = penumbra::SoftLightPass::Raster;
+    penumbra::SampleBasedSoftShadows raster(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+    raster.reserve(w.samples());
+#ifdef NDEBUG
+    CHECK(raster.run(input, soft.table(), &good, 1) == Status::InvalidArgument);
+#endif
+}
+
+TEST_CASE("Compute light pass: a frame makes no draw, query, stencil or framebuffer call, and keeps the per-frame contract") {
+    penumbra::test::context();
+    const penumbra::test::GlWorld w(penumbra::scene::builtin("columns"));
+    const penumbra::test::GlSoftLight soft(w, 64, 64, 32);
+    const std::vector<penumbra::CasterBuffer>& casters = w.gpu.casterBuffers();
+    for (const bool depth : {true, false}) {
+        CAPTURE(depth);
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.grid_width = options.grid_height = 64;
+        options.light_pass = penumbra::SoftLightPass::Compute;
+        options.timings = false;
+        penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+        pipeline.reserve(w.samples());
+        const penumbra::SampleDepthInput depth_input = w.depthInput();
+        const penumbra::SampleBufferInput buffer_input = w.bufferInput();
+        const penumbra::BufferRange table = soft.table();
+        Status status = Status::Ok;
+        const auto frame = [&] {
+            status = depth ? pipeline.run(depth_input, table, casters.data(), static_cast<uint32_t>(casters.size()))
+                           : pipeline.run(buffer_input, w.samples(), table, casters.data(), static_cast<uint32_t>(casters.size()));
+        };
+        frame();  // warm-up
+        penumbra::test::checkPerFrameContract(frame);
+        CHECK(status == Status::Ok);
+        penumbra::test::GlAudit audit;
+        audit.start();
+        frame();
+        audit.stop();
+        const std::vector<std::string> names = audit.names();
+        size_t graphics = 0;
+        for (const std::string& name : names)
+            for (const char* word : {"Draw", "Query", "ConditionalRender", "Stencil", "Framebuffer", "Viewport", "VertexArray"})
+                if (name.find(word) != std::string::npos) {
+                    ++graphics;
+                    MESSAGE("graphics-pipeline call in a compute frame: ", name);
+                }
+        CHECK(!audit.overflowed());
+        CHECK(graphics == 0);
+        MESSAGE("compute light pass frame (", std::string(depth ? "depth" : "buffer"), " input): ", names.size(), " GL calls, ", graphics,
+                " draw / query / stencil / framebuffer calls");
+    }
 }

@@ -870,9 +870,25 @@ using SbsParams = shared::PenumbraSbsParams;
 static_assert(sizeof(SbsParams) == 7 * 32 + 4 * 16 + 48, "std140 layout the shaders assume: 7 dvec4, 4 uvec4, the LUT block");
 static_assert(offsetof(SbsParams, grid) == 224 && offsetof(SbsParams, lut) == 288, "PenumbraSbsParams offsets");
 
+/// How gl::SampleBasedSoftShadows finds the (caster triangle, light texel) pairs.
+enum class SoftLightPass {
+    /// Your DrawCasters callback draws the casters; a geometry stage emits each influence region
+    /// (small ones go to the coverage pass), the rasteriser finds its texels. Needs geometry
+    /// shaders; every option and skip.
+    Raster,
+    /// The casters are buffers (CasterBuffer); compute passes only, no draw call, query, stencil or
+    /// framebuffer: one invocation per triangle builds what the geometry stage does
+    /// (light_pass_setup.comp.glsl), the coverage pass visits every region's texels. The same
+    /// bits as Raster in Exact and Brute (the counters differ by the coverage pass's boundary
+    /// texels). Needs deferred_pairs > 0; not yet skips.silhouettes (its pass draws adjacency).
+    Compute
+};
+
 /// Options of gl::SampleBasedSoftShadows (value-initialised = defaults; the grid size must be set).
 struct SampleBasedSoftGpuOptions {
     SoftMode mode = SoftMode::Exact;
+    /// Raster: run() with a DrawCasters callback; Compute: run() with CasterBuffer ranges.
+    SoftLightPass light_pass = SoftLightPass::Raster;
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid (sample lists and influence regions)
     /// View samples one fragment walks per pass (sintorn2008 §3.1's blocks). Keep
     /// list_block * N (brute / unproven pairs) below llvmpipe's 65 535 loop iterations per invocation.
@@ -917,7 +933,9 @@ struct SampleBasedSoftGpuOptions {
     uint32_t deferred_pairs = 1u << 20;
     /// Triangle slots for deferred pairs (one per caster triangle, list block and caster class drawn
     /// that emits an influence region; 112 bytes each: the vertices, the draw, SoftSkips::wedges'
-    /// planes; at most 2^24). 0: deferred_pairs / 4 (28 MiB by default).
+    /// planes; at most 2^24). 0: deferred_pairs / 4 (28 MiB by default). SoftLightPass::Compute:
+    /// one region record per slot too (4 (2 + 2 (3k + 5)) bytes: 192 for k = 6), the triangles the
+    /// host dispatches between two runs of the deferred passes; 0: 2^17 (14 + 24 MiB at k = 6).
     uint32_t deferred_triangles = 0;
     /// Deferred pairs: fragments whose pairs do not fit the pairs buffer (8 bytes each). They are
     /// appended whole, (triangle slot, texel), and worked by the compute pass's per-fragment
@@ -979,6 +997,13 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.coverage_texels <= (1u << 20), "penumbra::SampleBasedSoftShadows: coverage_texels = ", o.coverage_texels,
                    " must be at most 1048576");
+    PENUMBRA_CHECK(o.light_pass == SoftLightPass::Raster || o.light_pass == SoftLightPass::Compute,
+                   "penumbra::SampleBasedSoftShadows: unknown light_pass ", static_cast<uint32_t>(o.light_pass));
+    PENUMBRA_CHECK(o.light_pass != SoftLightPass::Compute || o.deferred_pairs > 0,
+                   "penumbra::SampleBasedSoftShadows: light_pass = Compute needs deferred_pairs > 0 (its pairs are deferred)");
+    PENUMBRA_CHECK(o.light_pass != SoftLightPass::Compute || !o.skips.silhouettes,
+                   "penumbra::SampleBasedSoftShadows: light_pass = Compute does not take skips.silhouettes yet (the "
+                   "silhouette pass draws adjacency); use light_pass = Raster for it");
     PENUMBRA_CHECK(o.deferred_regions <= 65535u * 64u, "penumbra::SampleBasedSoftShadows: deferred_regions = ", o.deferred_regions,
                    " must be at most 4194240 (one dispatch of 65 535 groups of 64)");
 }

@@ -11,12 +11,18 @@
 // (light_pass_tables.comp.glsl), after the passes that fill their buffers: the entries appended, up
 // to the capacity PENUMBRA_SBS_ARGS_CAPACITY (requests past it wrote no work); kind 3 the same for
 // the coverage pass (light_pass_coverage.comp.glsl) after the draws, before kind 0 (the records
-// past its capacity were drawn).
+// past its capacity were drawn); kind 4 (the compute light pass, after kind 0): the coverage pass's
+// group counts again for its program that works the pairs itself, when kind 0 found an overflow
+// (else 0 groups), its z the texels of a tile (PENUMBRA_SBS_ARGS_TILE_TEXELS); kind 5 (after the
+// coverage pass's tile counts and their scan): its (record, tile) items and group counts, folded
+// into x and y.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY=256u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=4 PENUMBRA_SBS_ARGS_TILE_TEXELS=256u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=5 PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_TILE_BASE=0u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
 #ifndef PENUMBRA_SBS_COUNT_WORK
@@ -32,6 +38,9 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 
 #ifndef PENUMBRA_SBS_ARGS_KIND
 #define PENUMBRA_SBS_ARGS_KIND 0  // 0: the pairs' compute pass, 1: the exact-test pass, 2: the tables pass
+#endif
+#ifndef PENUMBRA_SBS_ARGS_TILE_TEXELS
+#define PENUMBRA_SBS_ARGS_TILE_TEXELS 1u  // kind 4: texels per coverage tile
 #endif
 #ifndef PENUMBRA_SBS_ARGS_CAPACITY
 #define PENUMBRA_SBS_ARGS_CAPACITY 0u  // SampleBasedSoftGpuOptions::deferred_pairs, deferred_tests, deferred_pairs
@@ -57,8 +66,29 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #define PENUMBRA_SBS_ARGS_GROUP PENUMBRA_SBS_DEFERRAL_GROUP
 #endif
 
+#if PENUMBRA_SBS_ARGS_KIND == 5
+// The coverage pass's tile counts and first items (light_pass_coverage.comp.glsl).
+layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
+#endif
+
 void main() {
-#if PENUMBRA_SBS_ARGS_KIND != 0
+#if PENUMBRA_SBS_ARGS_KIND == 4
+    const bool overflow = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FALLBACK] != 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS] = overflow ? penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS] : 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS + 1] = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 1];
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS + 2] = uint(PENUMBRA_SBS_ARGS_TILE_TEXELS);
+#elif PENUMBRA_SBS_ARGS_KIND == 5
+    const uint records = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED];
+    const uint counts = uint(PENUMBRA_SBS_TILE_BASE), firsts = counts + 3u * uint(PENUMBRA_SBS_REGION_CAPACITY);
+    const uint items = records == 0u ? 0u : penumbraSbsTriangles[firsts + records - 1u] + penumbraSbsTriangles[counts + records - 1u];
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ITEMS_DISPATCHED] = items;
+    // At most 65 535 groups per dimension (GL's minimum): folded into y.
+    const uint groups = (items + uint(PENUMBRA_SBS_COVERAGE_GROUP) - 1u) / uint(PENUMBRA_SBS_COVERAGE_GROUP);
+    const uint x = min(groups, 65535u);
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS] = x;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 1] = x == 0u ? 1u : (groups + x - 1u) / x;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 2] = 1u;
+#elif PENUMBRA_SBS_ARGS_KIND != 0
     const uint entries = min(penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER], uint(PENUMBRA_SBS_ARGS_CAPACITY));
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_DISPATCHED] = entries;
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS] = (entries + uint(PENUMBRA_SBS_ARGS_GROUP) - 1u) / uint(PENUMBRA_SBS_ARGS_GROUP);
@@ -92,7 +122,12 @@ void main() {
     // its own).
     if (!overflow) penumbraSbsWork[PENUMBRA_SBS_WORK_DEFERRED] += dispatched - penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY];
     if (overflow) penumbraSbsWork[PENUMBRA_SBS_WORK_FALLBACKS] += 1u;
+    // The compute light pass's setup counts, overflow or not.
+    penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED] += penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP];
+    penumbraSbsWork[PENUMBRA_SBS_WORK_BAD_INDICES] += penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP + 1];
 #endif
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP] = 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP + 1] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS] = 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_EMPTY] = 0u;

@@ -74,6 +74,13 @@
 #ifndef PENUMBRA_SBS_FRAGMENTS_BINDING
 #define PENUMBRA_SBS_FRAGMENTS_BINDING 16  // uvec2[deferred_fragments]: (triangle slot, texel x | y << 16)
 #endif
+// The compute light pass's casters (SoftLightPass::Compute; caster_buffer.glsl).
+#ifndef PENUMBRA_SBS_CASTER_POSITIONS_BINDING
+#define PENUMBRA_SBS_CASTER_POSITIONS_BINDING 17  // float[]: CasterBuffer::positions
+#endif
+#ifndef PENUMBRA_SBS_CASTER_INDICES_BINDING
+#define PENUMBRA_SBS_CASTER_INDICES_BINDING 18    // uint[]: CasterBuffer::indices
+#endif
 // Resolve.
 #ifndef PENUMBRA_SBS_SLOTS_BINDING
 #define PENUMBRA_SBS_SLOTS_BINDING 0
@@ -126,7 +133,9 @@
 #define PENUMBRA_SBS_WORK_DEFERRED 14          // deferred pairs: (triangle, view sample) pairs the compute pass worked
 #define PENUMBRA_SBS_WORK_FALLBACKS 15         // deferred pairs: draws redrawn by the fragment stage (overflow)
 #define PENUMBRA_SBS_WORK_PAIRS_WEDGED 16      // pairs whose view sample lies beyond one of T's wedge planes
-#define PENUMBRA_SBS_WORK_WORDS 17
+#define PENUMBRA_SBS_WORK_BAD_INDICES 17       // compute light pass: caster triangles naming a vertex past
+                                               // their positions (cast nothing; counted once per frame)
+#define PENUMBRA_SBS_WORK_WORDS 18
 
 // The deferral buffer's words (PENUMBRA_SBS_DEFERRAL_BINDING).
 #define PENUMBRA_SBS_DEFERRAL_PAIRS 0        // pairs appended since the last dispatch (may exceed the capacity)
@@ -135,7 +144,7 @@
 #define PENUMBRA_SBS_DEFERRAL_OVERFLOW 3     // set by a fragment whose triangle got no slot
 #define PENUMBRA_SBS_DEFERRAL_ARGS 4         // 3 words: glDispatchComputeIndirect's group counts
 #define PENUMBRA_SBS_DEFERRAL_FALLBACK 7     // the last draws overflowed: the fragment stage redraws them
-#define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws (to 27)
+#define PENUMBRA_SBS_DEFERRAL_PENDING 8      // PENUMBRA_SBS_WORK_WORDS counters of the deferring draws (to 27 at most)
 #define PENUMBRA_SBS_DEFERRAL_TESTS 28       // exact-test words appended by the compute pass (may exceed the capacity)
 #define PENUMBRA_SBS_DEFERRAL_TESTS_DISPATCHED 29  // words the exact-test pass reads
 #define PENUMBRA_SBS_DEFERRAL_SAMPLES 30     // pairs handed to the tables pass (at most the pairs dispatched)
@@ -149,9 +158,18 @@
 #define PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED 43  // coverage: region records the coverage pass reads
 #define PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS 44  // 3 words: the per-fragment pass's group counts
 #define PENUMBRA_SBS_DEFERRAL_REGION_ARGS 48  // 3 words: the coverage pass's group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 52
+#define PENUMBRA_SBS_DEFERRAL_INLINE_ARGS 52  // 3 words: compute light pass, the coverage pass working its
+                                              // regions' pairs itself (0 groups unless the pairs overflowed)
+#define PENUMBRA_SBS_DEFERRAL_ITEMS_DISPATCHED 55  // coverage: (record, tile) work items the coverage pass reads
+#define PENUMBRA_SBS_DEFERRAL_SETUP 56       // 2 words: the compute light pass's setup counts (culled triangles,
+                                             // bad indices), kept whatever overflows
+#define PENUMBRA_SBS_DEFERRAL_SETUP_ARGS 58  // 3 words: the compute light pass's setup dispatch (x: triangles,
+                                             // y: the list blocks of this dispatch that some list reaches)
+#define PENUMBRA_SBS_DEFERRAL_WORDS 61
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_COVERAGE_GROUP 64      // light_pass_coverage.comp.glsl's workgroup size
+#define PENUMBRA_SBS_SETUP_GROUP 64         // light_pass_setup.comp.glsl's workgroup size
+#define PENUMBRA_SBS_COVERAGE_SCAN_GROUP 256  // the coverage pass's scan of first items (one workgroup)
 // A region record (coverage, after the triangle slots in the triangles buffer): the triangle's
 // slot, the polygon's vertex count n, then n vec2 (grid pixels) as float bits.
 #define PENUMBRA_SBS_REGION_WORDS(k) (2u + 2u * uint(PENUMBRA_INFLUENCE_MAX_VERTICES(k)))

@@ -82,6 +82,17 @@
 //             the block holds one at all: the blocks that hold none are not drawn) and (3b)
 //             again, (4) resolve. Nothing
 //             is read back, queried, allocated or thrown: misuse returns a Status.
+//   compute:  options.light_pass = SoftLightPass::Compute: run() takes the casters as CasterBuffer
+//             ranges instead of a callback, and (2), (2c) and (3)'s draws become compute passes: for
+//             each list block b and class, one dispatch per range (light_pass_setup.comp.glsl, one
+//             invocation per triangle: blocks no list reaches return at once) stores every
+//             triangle's slot and region record, then the coverage pass and (3b) as above; the host
+//             runs (3b) whenever the triangles dispatched since the last run could fill the slots
+//             (so none overflows); when the pairs and fragments overflow, the coverage pass's
+//             program that works the pairs itself runs instead of the redraw (group counts decided
+//             on the GPU). No draw, query, stencil or framebuffer call; the GL state it changes is
+//             the program, the buffer bindings above plus SbsBindings::caster_positions /
+//             caster_indices, and GL_DISPATCH_INDIRECT_BUFFER.
 //
 // GL state: changes without restoring the current program, the draw framebuffer binding (the
 // pipeline's own), the viewport, GL_DEPTH_TEST (off), GL_CULL_FACE (off), GL_RASTERIZER_DISCARD
@@ -104,6 +115,7 @@
 #include "penumbra/influence_region.hpp"
 #include "penumbra/pipelines/sample_based_soft.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <iterator>
@@ -139,6 +151,8 @@ struct SbsBindings {
     uint32_t tests = PENUMBRA_SBS_TESTS_BINDING;          ///< deferred pairs: pending exact-test words
     uint32_t table_pairs = PENUMBRA_SBS_TABLE_PAIRS_BINDING;  ///< deferred pairs: pairs for the tables pass
     uint32_t fragments = PENUMBRA_SBS_FRAGMENTS_BINDING;      ///< deferred pairs: fragments past the pairs buffer
+    uint32_t caster_positions = PENUMBRA_SBS_CASTER_POSITIONS_BINDING;  ///< SoftLightPass::Compute: CasterBuffer::positions
+    uint32_t caster_indices = PENUMBRA_SBS_CASTER_INDICES_BINDING;      ///< SoftLightPass::Compute: CasterBuffer::indices
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -180,6 +194,9 @@ struct SampleBasedSoftFrame {
     /// Deferred pairs: passes (the first, the closed casters' second) that overflowed the pairs
     /// buffer or the triangle slots and were drawn again with the fragment-stage program.
     uint64_t deferral_fallbacks = 0;
+    /// SoftLightPass::Compute: caster triangles naming a vertex past their CasterBuffer's positions
+    /// (they cast nothing: the masks miss their shadows; count_work).
+    uint64_t caster_indices_out_of_range = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -212,13 +229,14 @@ public:
         influence_ = influence;
         // Checks the LUT against the sets and the mode (throws).
         (void)sampleBasedSoftParams(options_, sets_, lut, 0, 0, false);
-        const GLint fragment_blocks = gl::getInteger(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS);
+        const bool compute = options_.light_pass == SoftLightPass::Compute;
+        const GLint fragment_blocks = compute ? 0 : gl::getInteger(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS);
         const GLint needed = (options_.count_work ? 9 : 8) + (options_.skips.silhouettes ? 1 : 0) +
                              (options_.skips.closed_casters ? 1 : 0);
-        PENUMBRA_CHECK(fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
+        PENUMBRA_CHECK(compute || fragment_blocks >= needed, "penumbra::SampleBasedSoftShadows: GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS = ",
                        fragment_blocks, ", the light pass needs ", needed,
                        " (8, plus one each for count_work, skips.closed_casters and skips.silhouettes)");
-        if (options_.count_work) {
+        if (options_.count_work && !compute) {
             const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
             PENUMBRA_CHECK(geometry_blocks >= 1, "penumbra::SampleBasedSoftShadows: GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS = ",
                            geometry_blocks, ": count_work needs 1 (the culled-triangle counter); set count_work = false");
@@ -242,14 +260,16 @@ public:
             {"PENUMBRA_SBS_MARKS_BINDING", b.marks},         {"PENUMBRA_SBS_NEAR_BINDING", b.near_samples},
             {"PENUMBRA_SBS_DEFERRAL_BINDING", b.deferral},   {"PENUMBRA_SBS_PAIRS_BINDING", b.pairs},
             {"PENUMBRA_SBS_TRIANGLES_BINDING", b.triangles}, {"PENUMBRA_SBS_TESTS_BINDING", b.tests},
-            {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}, {"PENUMBRA_SBS_FRAGMENTS_BINDING", b.fragments}};
+            {"PENUMBRA_SBS_TABLE_PAIRS_BINDING", b.table_pairs}, {"PENUMBRA_SBS_FRAGMENTS_BINDING", b.fragments},
+            {"PENUMBRA_SBS_CASTER_POSITIONS_BINDING", b.caster_positions}, {"PENUMBRA_SBS_CASTER_INDICES_BINDING", b.caster_indices}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
         const bool deferred = options_.deferred_pairs > 0;
         // Every binding a program uses below the driver's limit (GL's minimum is 8 storage
-        // bindings; the defaults reach 16 with deferred pairs, the last six entries above).
+        // bindings; the defaults reach 16 with deferred pairs, the six entries before the last
+        // two, and 18 with the compute light pass's casters, the last two).
         const GLint max_storage = gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
         const GLint max_uniform = gl::getInteger(GL_MAX_UNIFORM_BUFFER_BINDINGS);
-        const size_t binding_count = std::size(binding_defines) - (deferred ? 0 : 6);
+        const size_t binding_count = std::size(binding_defines) - (compute ? 0 : 2) - (deferred ? 0 : 6);
         for (size_t i = 0; i < binding_count; ++i) {
             const bool uniform = i < 2;  // params, influence
             const GLint limit = uniform ? max_uniform : max_storage;
@@ -258,16 +278,35 @@ public:
                            " is not below ", uniform ? "GL_MAX_UNIFORM_BUFFER_BINDINGS = " : "GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS = ",
                            limit, " (choose lower SbsBindings", deferred ? ", or set deferred_pairs = 0)" : ")");
         }
-        // Coverage (options.coverage_texels): records after the triangle slots.
+        // Coverage (options.coverage_texels; every region with the compute light pass): records
+        // after the triangle slots.
         const uint32_t slots = options_.deferred_triangles ? options_.deferred_triangles
+                               : compute                   ? 1u << 17
                                                            : std::max<uint32_t>(1, options_.deferred_pairs / 4);
-        const bool coverage = deferred && options_.coverage_texels > 0;
-        const uint32_t regions = !coverage ? 0u
+        const bool coverage = compute || (deferred && options_.coverage_texels > 0);
+        const uint32_t regions = !coverage                    ? 0u
+                                 : compute                    ? slots
                                  : options_.deferred_regions ? options_.deferred_regions
                                                              : std::min<uint32_t>(slots, 1u << 16);
+        slots_ = slots;
         const uint32_t region_words = 2u + 2u * uint32_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence.sides()));
         const uint32_t occupancy_row = (options_.grid_width + 31) / 32;
         const uint64_t occupancy_words = coverage ? uint64_t(occupancy_row) * options_.grid_height : 0u;
+        // The coverage pass's work items: tiles of tile_rows_ x tile_columns_ texels, each within
+        // ~16k loop iterations (llvmpipe silently ends an invocation's loops at 65 535 in all):
+        // per row the polygon's edges and an occupancy word, per texel a list block's appends
+        // (wedge tests, pairs, the straddling fragment's empty pairs: 3 list_block + 4).
+        {
+            const uint64_t per_texel = 3ull * options_.list_block + 4;
+            const uint64_t per_row = uint64_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence.sides())) + 4;
+            tile_columns_ = 32;
+            while (tile_columns_ > 1 && per_row + tile_columns_ * per_texel > kCoverageItemIterations) tile_columns_ /= 2;
+            tile_rows_ = static_cast<uint32_t>(
+                std::clamp<uint64_t>(kCoverageItemIterations / (per_row + tile_columns_ * per_texel), 1, 8));
+        }
+        grid_tiles_ = detail::divUp(options_.grid_width, tile_columns_) * detail::divUp(options_.grid_height, tile_rows_);
+        // Per record its tile count, 2 box words and first item; per tile of the grid its longest list.
+        const uint64_t tile_words = coverage ? 4ull * regions + grid_tiles_ : 0u;
         ShaderDefines region_defines;
         if (coverage) {
             region_defines.push_back({"PENUMBRA_SBS_REGION_BASE", std::to_string(uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS) + "u"});
@@ -276,8 +315,16 @@ public:
             region_defines.push_back({"PENUMBRA_SBS_OCCUPANCY_BASE",
                                       std::to_string(uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * region_words) + "u"});
             region_defines.push_back({"PENUMBRA_SBS_OCCUPANCY_ROW", std::to_string(occupancy_row) + "u"});
+            tile_base_ = uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * region_words + occupancy_words;
+            region_defines.push_back({"PENUMBRA_SBS_TILE_BASE", std::to_string(tile_base_) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_TILE_ROWS", std::to_string(tile_rows_) + "u"});
+            region_defines.push_back({"PENUMBRA_SBS_TILE_COLUMNS", std::to_string(tile_columns_) + "u"});
+            regions_ = regions;
             region_defines.push_back(
-                {"PENUMBRA_SBS_STENCIL_BLOCKS", std::to_string(options_.skips.empty_blocks ? gl::kOccupancyStencilBlocks : 0u) + "u"});
+                {"PENUMBRA_SBS_STENCIL_BLOCKS", std::to_string(compute                       ? 0xFFFFFFFFu
+                                                               : options_.skips.empty_blocks ? gl::kOccupancyStencilBlocks
+                                                                                             : 0u) +
+                                                    "u"});
         }
         const auto light_pass_program = [&](bool deferring) {
             ShaderDefines d = defines;
@@ -288,14 +335,14 @@ public:
                                      "penumbra/sample_based_soft/light_pass.frag.glsl"},
                                     d, library);
         };
-        light_pass_ = light_pass_program(deferred);
+        if (!compute) light_pass_ = light_pass_program(deferred);
         if (deferred) {
             // Deferred pairs: the geometry stage stores triangles (two more storage blocks), the
             // fragment stage appends pairs, a compute pass works them (checked here, throws); the
             // program without deferral redraws the draws that overflow, under predicates of its own.
             const GLint compute_blocks = gl::getInteger(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS);
             const GLint geometry_blocks = gl::getInteger(GL_MAX_GEOMETRY_SHADER_STORAGE_BLOCKS);
-            PENUMBRA_CHECK(geometry_blocks >= (options_.count_work ? 3 : 2) && compute_blocks >= needed + 5,
+            PENUMBRA_CHECK((compute || geometry_blocks >= (options_.count_work ? 3 : 2)) && compute_blocks >= needed + 5,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs needs ", options_.count_work ? 3 : 2,
                            " geometry and ", needed + 5, " compute storage blocks; the driver has ", geometry_blocks, " and ",
                            compute_blocks, "; set deferred_pairs = 0");
@@ -308,7 +355,8 @@ public:
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
             const uint64_t fragment_bytes = uint64_t(fragments) * 8;
             const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
-            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * 4 * region_words + 4 * occupancy_words;
+            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * 4 * region_words +
+                                            4 * occupancy_words + 4 * tile_words;
             PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
                                fragment_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
@@ -318,6 +366,8 @@ public:
             // The group counts of each compute pass (PENUMBRA_SBS_ARGS_KIND: 0 pairs, 1 exact tests, 2 tables).
             const auto args_program = [&](uint32_t kind, uint32_t capacity) {
                 ShaderDefines d = defines;
+                if (kind == 5) d.insert(d.end(), region_defines.begin(), region_defines.end());
+                d.push_back({"PENUMBRA_SBS_ARGS_TILE_TEXELS", std::to_string(tile_rows_ * tile_columns_) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
                 d.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(capacity) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY", std::to_string(fragments) + "u"});
@@ -335,6 +385,11 @@ public:
                 d.push_back({"PENUMBRA_SBS_COVERAGE_BITS", "1"});
                 coverage_bits_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
                 coverage_bit_groups_ = uint32_t(detail::divUp(occupancy_words, PENUMBRA_SBS_COVERAGE_GROUP));
+                d.back() = {"PENUMBRA_SBS_COVERAGE_COUNT", "1"};
+                coverage_count_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                d.back() = {"PENUMBRA_SBS_COVERAGE_SCAN", "1"};
+                coverage_scan_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                item_args_ = args_program(5, regions);
             }
             ShaderDefines per_fragment = defines;
             per_fragment.push_back({"PENUMBRA_SBS_PER_FRAGMENT", "1"});
@@ -344,19 +399,33 @@ public:
             tests_ = gl::Buffer(test_bytes);
             table_pairs_ = gl::Buffer(table_bytes);
             fragments_ = gl::Buffer(fragment_bytes);
-            light_fragment_ = light_pass_program(false);
-            ShaderDefines fallback_defines = defines;
-            fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
-            fallback_blocks_ = gl::buildProgram(
-                {"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"}, fallback_defines,
-                library);
-            for (uint32_t q = 0; q < options_.max_list_blocks; ++q) fallback_queries_.push_back(gl::OcclusionQuery::create());
+            if (compute) {
+                // The caster setup, and the coverage pass that works its pairs itself after an overflow.
+                ShaderDefines d = defines;
+                d.insert(d.end(), region_defines.begin(), region_defines.end());
+                setup_program_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_setup.comp.glsl", d, library);
+                d.push_back({"PENUMBRA_SBS_SETUP_GATE", "1"});
+                setup_gate_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_setup.comp.glsl", d, library);
+                d.pop_back();
+                d.push_back({"PENUMBRA_SBS_COVERAGE_INLINE", "1"});
+                light_inline_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                inline_args_ = args_program(4, 0);
+            } else {
+                light_fragment_ = light_pass_program(false);
+                ShaderDefines fallback_defines = defines;
+                fallback_defines.push_back({"PENUMBRA_SBS_FALLBACK_PREDICATE", "1"});
+                fallback_blocks_ = gl::buildProgram(
+                    {"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
+                    fallback_defines, library);
+                for (uint32_t q = 0; q < options_.max_list_blocks; ++q) fallback_queries_.push_back(gl::OcclusionQuery::create());
+            }
             deferral_ = gl::Buffer(PENUMBRA_SBS_DEFERRAL_WORDS * 4);
             pairs_ = gl::Buffer(pair_bytes);
             triangles_ = gl::Buffer(triangle_bytes);
         }
-        blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
-                                   defines, library);
+        if (!compute)
+            blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/sample_based_soft/blocks.frag.glsl"},
+                                       defines, library);
         resolve_ = gl::buildComputeProgram("penumbra/sample_based_soft/resolve.comp.glsl", defines, library);
         const auto occupancy_program = [&](uint32_t kind) {
             ShaderDefines d = defines;
@@ -364,11 +433,11 @@ public:
             return gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/sample_based_soft/occupancy.frag.glsl"}, d,
                                     library);
         };
-        if (options_.skips.closed_casters && !options_.count_work) {
+        if (options_.skips.closed_casters && !options_.count_work && !compute) {
             near_blocks_ = occupancy_program(2);
             for (uint32_t q = 0; q < options_.max_list_blocks; ++q) near_queries_.push_back(gl::OcclusionQuery::create());
         }
-        if (options_.skips.empty_blocks) {
+        if (options_.skips.empty_blocks && !compute) {
             occupancy_ = occupancy_program(0);
             if (options_.skips.closed_casters) near_stencil_ = occupancy_program(1);
             stencil_ = gl::Renderbuffer::create();
@@ -403,10 +472,15 @@ public:
         work_ = gl::Buffer(PENUMBRA_SBS_WORK_WORDS * 4);
         lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
         dummy_ = gl::Buffer(16);
-        framebuffer_ = gl::Framebuffer::create();
-        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
-        glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
-        if (options_.skips.empty_blocks) {
+        if (!compute) {
+            framebuffer_ = gl::Framebuffer::create();
+            glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
+            glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT,
+                                         static_cast<GLint>(options_.grid_height));
+            empty_vao_ = gl::VertexArray::create();
+            for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
+        }
+        if (options_.skips.empty_blocks && !compute) {
             glNamedFramebufferRenderbuffer(framebuffer_.id(), GL_STENCIL_ATTACHMENT, GL_RENDERBUFFER, stencil_.id());
             const GLenum complete = glCheckNamedFramebufferStatus(framebuffer_.id(), GL_DRAW_FRAMEBUFFER);
             PENUMBRA_CHECK(complete == GL_FRAMEBUFFER_COMPLETE, "penumbra::SampleBasedSoftShadows: the light pass's ",
@@ -414,8 +488,6 @@ public:
                            " framebuffer with a GL_STENCIL_INDEX8 attachment (skips.empty_blocks) is incomplete (status 0x",
                            std::hex, complete, std::dec, "); set skips.empty_blocks = false");
         }
-        empty_vao_ = gl::VertexArray::create();
-        for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
         if (options_.timings) {
             timers_.reserve(3);
             for (int t = 0; t < 3; ++t) timers_.emplace_back();
@@ -465,7 +537,8 @@ public:
     /// Every pass for buffer input (see the summary). `lut_table` may be empty in Brute mode.
     Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table,
                const DrawCasters& draw_casters, const SbsFrameBuffers& frame = {}, const DrawAdjacency& draw_adjacency = {}) {
-        const Status s = begin(sample_count, lut_table, draw_casters, frame, draw_adjacency);
+        const Status s = begin(sample_count, lut_table, options_.light_pass == SoftLightPass::Raster && draw_casters, frame,
+                               &draw_adjacency);
         if (s != Status::Ok) return s;
         if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
@@ -481,7 +554,8 @@ public:
                const SbsFrameBuffers& frame = {}, const DrawAdjacency& draw_adjacency = {}) {
         const uint64_t n = uint64_t(input.view.width) * input.view.height;
         if (n > reserved_) return fail(Status::NotReserved);
-        const Status s = begin(static_cast<uint32_t>(n), lut_table, draw_casters, frame, draw_adjacency);
+        const Status s = begin(static_cast<uint32_t>(n), lut_table, options_.light_pass == SoftLightPass::Raster && draw_casters,
+                               frame, &draw_adjacency);
         if (s != Status::Ok) return s;
         if (!timers_.empty()) timers_[0].begin();
         const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
@@ -489,6 +563,61 @@ public:
         if (built != Status::Ok) return built;
         lightPassAndResolve(lut_table, draw_casters, frame);
         return Status::Ok;
+    }
+
+    /// SoftLightPass::Compute, buffer input: every pass, the casters as `caster_count` ranges
+    /// (CasterBuffer; ranges of 0 triangles are skipped). Misuse (the Raster light pass, a stride
+    /// below 12 or not a multiple of 4, a range too small for its triangles, a misaligned offset)
+    /// returns a Status and does nothing.
+    Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table, const CasterBuffer* casters,
+               uint32_t caster_count, const SbsFrameBuffers& frame = {}) {
+        const Status c = checkCasters(casters, caster_count);
+        if (c != Status::Ok) return c;
+        const Status s = begin(sample_count, lut_table, true, frame, nullptr);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, {}, frame, casters, caster_count);
+        return Status::Ok;
+    }
+
+    /// SoftLightPass::Compute, depth input (as the DrawCasters overload).
+    Status run(const SampleDepthInput& input, const BufferRange& lut_table, const CasterBuffer* casters, uint32_t caster_count,
+               const SbsFrameBuffers& frame = {}) {
+        const uint64_t n = uint64_t(input.view.width) * input.view.height;
+        if (n > reserved_) return fail(Status::NotReserved);
+        const Status c = checkCasters(casters, caster_count);
+        if (c != Status::Ok) return c;
+        const Status s = begin(static_cast<uint32_t>(n), lut_table, true, frame, nullptr);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, {}, frame, casters, caster_count);
+        return Status::Ok;
+    }
+
+    /// Load-time check of CasterBuffer ranges against their buffers (GL queries; throws naming the
+    /// range): what run() checks, plus the buffers' sizes.
+    void validateCasters(const CasterBuffer* casters, uint32_t caster_count) const {
+        const char* f = "SampleBasedSoftShadows::validateCasters";
+        PENUMBRA_CHECK(options_.light_pass == SoftLightPass::Compute, "penumbra::", f,
+                       ": casters as buffers need options.light_pass = SoftLightPass::Compute");
+        PENUMBRA_CHECK(caster_count == 0 || casters != nullptr, "penumbra::", f, ": ", caster_count, " ranges at a null pointer");
+        for (uint32_t i = 0; i < caster_count; ++i) {
+            const CasterBuffer& c = casters[i];
+            if (c.triangles == 0) continue;
+            PENUMBRA_CHECK(c.stride >= 12 && c.stride % 4 == 0, "penumbra::", f, ": caster range ", i, ": stride ", c.stride,
+                           " must be a multiple of 4, at least 12");
+            PENUMBRA_CHECK(c.triangles <= kMaxCasterTriangles, "penumbra::", f, ": caster range ", i, ": ", c.triangles,
+                           " triangles, at most ", kMaxCasterTriangles);
+            const std::string what = "caster range " + std::to_string(i);
+            gl::validateRange(c.positions, casterPositionBytes(c), (what + " positions").c_str(), f, ssbo_alignment_);
+            if (!c.indices.empty()) gl::validateRange(c.indices, uint64_t(c.triangles) * 12, (what + " indices").c_str(), f, ssbo_alignment_);
+        }
     }
 
     /// What the last run did (reads back and waits: tools, tests, benchmarks).
@@ -515,6 +644,7 @@ public:
         f.pairs_wedged = w[PENUMBRA_SBS_WORK_PAIRS_WEDGED];
         f.pairs_deferred = w[PENUMBRA_SBS_WORK_DEFERRED];
         f.deferral_fallbacks = w[PENUMBRA_SBS_WORK_FALLBACKS];
+        f.caster_indices_out_of_range = w[PENUMBRA_SBS_WORK_BAD_INDICES];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
@@ -563,7 +693,17 @@ private:
     gl::Program light_compute_, light_coverage_, coverage_bits_, region_args_, light_fragments_, deferral_args_, light_fragment_, fallback_blocks_, test_args_, light_tests_,
         table_args_, light_tables_;
     gl::Buffer deferral_, pairs_, triangles_, tests_, table_pairs_, fragments_;
+    // SoftLightPass::Compute: the caster setup, the coverage pass working its pairs itself after an
+    // overflow, and its group counts; the triangle slots (and records) a deferred run holds.
+    gl::Program setup_program_, setup_gate_, light_inline_, inline_args_;
+    uint32_t slots_ = 0;
     uint32_t coverage_bit_groups_ = 0;  // the occupancy bits' groups (coverage_texels)
+    // The coverage pass's work items: tile counts per record, their scan into first items.
+    static constexpr uint64_t kCoverageItemIterations = 16384;
+    gl::Program coverage_count_, coverage_scan_, item_args_;
+    uint32_t tile_rows_ = 8, tile_columns_ = 32, regions_ = 0;
+    uint64_t tile_base_ = 0;   // the tile counts' first word in the triangles buffer
+    uint64_t grid_tiles_ = 0;  // tiles of the grid (their longest lists follow the records' first items)
     std::vector<gl::OcclusionQuery> fallback_queries_;
     gl::Renderbuffer stencil_;  // SoftSkips::empty_blocks: W x H, non-empty list blocks per texel
     /// Parameter slots per list block: closed, open, closed again (SoftSkips::closed_casters' second
@@ -598,11 +738,13 @@ private:
             gl::validateRange(frame.visibility, uint64_t(sample_count) * 4, "visibility", f, ssbo_alignment_);
     }
 
-    Status begin(uint32_t sample_count, const BufferRange& lut_table, const DrawCasters& draw_casters,
-                 const SbsFrameBuffers& frame, const DrawAdjacency& draw_adjacency) {
+    /// `casters`: the run's casters fit the light pass (a callback for Raster, checked buffers for
+    /// Compute); `draw_adjacency` null for Compute.
+    Status begin(uint32_t sample_count, const BufferRange& lut_table, bool casters, const SbsFrameBuffers& frame,
+                 const DrawAdjacency* draw_adjacency) {
         if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
-        if (!draw_casters || (options_.skips.silhouettes && !draw_adjacency)) return fail(Status::InvalidArgument);
-        draw_adjacency_ = &draw_adjacency;
+        if (!casters || (options_.skips.silhouettes && !(draw_adjacency && *draw_adjacency))) return fail(Status::InvalidArgument);
+        draw_adjacency_ = draw_adjacency;
         if (options_.mode != SoftMode::Brute && !lut_table.holds(lut_.tableBytes())) return fail(Status::RangeTooSmall);
         if (!frame.sets.empty() && !frame.sets.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
         if (!frame.masks.empty() && !frame.masks.holds(uint64_t(sample_count) * words_ * 4)) return fail(Status::RangeTooSmall);
@@ -616,6 +758,31 @@ private:
     static Status fail(Status s) {
         PENUMBRA_ASSERT(s == Status::Ok && "penumbra::SampleBasedSoftShadows: per-frame misuse (see the returned Status)");
         return s;
+    }
+
+    /// Triangles per CasterBuffer at most (3 corners each stay below 2^32).
+    static constexpr uint32_t kMaxCasterTriangles = 1u << 30;
+
+    /// Bytes `c`'s positions must hold: one vertex without indices, 3 per triangle without.
+    static uint64_t casterPositionBytes(const CasterBuffer& c) {
+        return c.indices.empty() ? (3 * uint64_t(c.triangles) - 1) * c.stride + 12 : 12;
+    }
+
+    /// run()'s per-frame check of the caster ranges (no GL call).
+    Status checkCasters(const CasterBuffer* casters, uint32_t count) const {
+        if (options_.light_pass != SoftLightPass::Compute || (count > 0 && casters == nullptr)) return fail(Status::InvalidArgument);
+        for (uint32_t i = 0; i < count; ++i) {
+            const CasterBuffer& c = casters[i];
+            if (c.triangles == 0) continue;
+            if (c.stride < 12 || c.stride % 4 != 0 || c.triangles > kMaxCasterTriangles ||
+                (c.caster_class != CasterClass::Closed && c.caster_class != CasterClass::Open))
+                return fail(Status::InvalidArgument);
+            if (!c.positions.holds(casterPositionBytes(c)) || (!c.indices.empty() && !c.indices.holds(uint64_t(c.triangles) * 12)))
+                return fail(Status::RangeTooSmall);
+            if (c.positions.offset % ssbo_alignment_ != 0 || (!c.indices.empty() && c.indices.offset % ssbo_alignment_ != 0))
+                return fail(Status::Misaligned);
+        }
+        return Status::Ok;
     }
 
     SampleListsOptions listOptions() const {
@@ -645,18 +812,9 @@ private:
     void workDeferredPairs(const Pass& pass, const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) {
         if (options_.deferred_pairs == 0) return;
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        if (light_coverage_.id() != 0) {
-            // The regions the geometry stage handed over instead of drawing them: their pairs
-            // appended as the fragment stage's were, before the pairs' group counts are taken.
-            region_args_.use();
-            glDispatchCompute(1, 1, 1);
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-            light_coverage_.use();
-            bindParams(0);  // each record's list block and flags come from its triangle slot
-            glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
-            glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_REGION_ARGS * 4));
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
+        // The regions the geometry stage handed over instead of drawing them: their pairs appended
+        // as the fragment stage's were, before the pairs' group counts are taken.
+        if (light_coverage_.id() != 0) coverageItems();
         deferral_args_.use();
         glDispatchCompute(1, 1, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
@@ -692,6 +850,42 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
 
+    /// Once per frame after the lists (coverage): the occupancy bits and each tile's longest list.
+    void coverageBits() {
+        const uint32_t zero = 0;
+        glClearNamedBufferSubData(triangles_.id(), GL_R32UI, static_cast<GLintptr>((tile_base_ + 4ull * regions_) * 4),
+                                  static_cast<GLsizeiptr>(grid_tiles_ * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        coverage_bits_.use();
+        bindParams(0);
+        glDispatchCompute(coverage_bit_groups_, 1, 1);  // <= 8192 * 256 / 64 groups
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    /// The coverage pass over the records appended since its last run: their tile counts, the
+    /// counts' scan into first items, the items' group counts, then the items (all sized on the
+    /// GPU by the records appended).
+    void coverageItems() {
+        glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
+        region_args_.use();
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        coverage_count_.use();
+        bindParams(0);
+        glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_REGION_ARGS * 4));
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        coverage_scan_.use();
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        item_args_.use();
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        light_coverage_.use();
+        bindParams(0);  // each record's list block and flags come from its triangle slot
+        glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_REGION_ARGS * 4));
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
     /// The light pass's storage buffers (and the compute pass's: the same bindings).
     void bindLightPass(const BufferRange& masks, const BufferRange& lut_table, const SbsFrameBuffers& frame) const {
         gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
@@ -723,7 +917,103 @@ private:
         }
     }
 
-    void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame) {
+    /// SoftLightPass::Compute, after the deferred passes' setup of the triangles dispatched since the
+    /// last call: the coverage pass appends their regions' pairs, the pairs, fragments, tables and
+    /// exact-test passes work them, and when the pairs and fragments overflowed the coverage pass's
+    /// inline program works every region itself instead (group counts decided on the GPU).
+    void workDeferredCompute() {
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());  // the setup bound the header there
+        coverageItems();
+        const auto args = [](const gl::Program& program) {
+            program.use();
+            glDispatchCompute(1, 1, 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+        };
+        const auto indirect = [&](const gl::Program& program, uint32_t words) {
+            program.use();
+            bindParams(0);  // each entry's list block and flags come from its triangle slot
+            glDispatchComputeIndirect(static_cast<GLintptr>(words * 4));
+        };
+        args(deferral_args_);
+        indirect(light_compute_, PENUMBRA_SBS_DEFERRAL_ARGS);
+        indirect(light_fragments_, PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS);  // no groups unless the pairs filled up
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        args(inline_args_);
+        indirect(light_inline_, PENUMBRA_SBS_DEFERRAL_INLINE_ARGS);  // no groups unless the fragments overflowed too
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        args(table_args_);
+        indirect(light_tables_, PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        args(test_args_);
+        indirect(light_tests_, PENUMBRA_SBS_DEFERRAL_TEST_ARGS);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    /// SoftLightPass::Compute's light pass: per list block and class the setup of every range
+    /// (blocks no list reaches return on the GPU), the deferred passes whenever the triangles
+    /// dispatched since their last run could fill the slots, then SoftSkips::closed_casters'
+    /// second pass the same way.
+    void computeLightPass(const CasterBuffer* casters, uint32_t caster_count) {
+        coverageBits();
+        // (triangle, list block) pairs between two runs of the deferred passes: at most the slots,
+        // and the coverage pass's items below 2^31 (a region spans at most every tile of the grid);
+        // triangles per dispatch at most 65 535 groups (GL's minimum).
+        const uint64_t run_pairs = std::max<uint64_t>(1, std::min<uint64_t>(slots_, (1ull << 31) / grid_tiles_));
+        const uint32_t chunk = static_cast<uint32_t>(std::min<uint64_t>(run_pairs, 65535u * PENUMBRA_SBS_SETUP_GROUP));
+        uint64_t pending = 0;  // pairs dispatched at most since the deferred passes last ran
+        const GLuint setup_id = setup_program_.id(), gate_id = setup_gate_.id();
+        // One range of class slot `c` (0 closed, 1 open, 2 the closed casters' second pass): per
+        // chunk of triangles, runs of list blocks (as many as the slots hold beside the chunk),
+        // each dispatched for the blocks the GPU finds needed (the gate).
+        const auto setup = [&](const CasterBuffer& range, uint32_t c) {
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.caster_positions, range.positions);
+            if (range.indices.empty()) {
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.caster_indices, dummy_.id());
+            } else {
+                gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.caster_indices, range.indices);
+            }
+            glProgramUniform1ui(setup_id, 1, static_cast<GLuint>(std::min<uint64_t>(range.positions.size / 4, 0xFFFFFFFFu)));
+            for (uint32_t first = 0; first < range.triangles; first += chunk) {
+                const uint32_t n = std::min(chunk, range.triangles - first);
+                const uint32_t blocks = static_cast<uint32_t>(std::clamp<uint64_t>(run_pairs / n, 1, options_.max_list_blocks));
+                glProgramUniform4ui(setup_id, 0, first, n, range.stride / 4, range.indices.empty() ? 0u : 1u);
+                glProgramUniform4ui(gate_id, 0, first, n, range.stride / 4, range.indices.empty() ? 0u : 1u);
+                for (uint32_t b0 = 0; b0 < options_.max_list_blocks; b0 += blocks) {
+                    const uint32_t run = std::min(blocks, options_.max_list_blocks - b0);
+                    if (pending + uint64_t(n) * run > run_pairs) {
+                        workDeferredCompute();
+                        pending = 0;
+                    }
+                    bindParams(1 + kSlotsPerBlock * b0 + c);
+                    gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+                    setup_gate_.use();
+                    glProgramUniform1ui(gate_id, 2, run);
+                    glDispatchCompute(1, 1, 1);
+                    glMemoryBarrier(GL_COMMAND_BARRIER_BIT);
+                    setup_program_.use();
+                    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
+                    glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_SETUP_ARGS * 4));
+                    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the next gate rewrites the arguments
+                    pending += uint64_t(n) * run;
+                }
+            }
+        };
+        const auto pass = [&](bool culled) {
+            for (uint32_t k = 0; k < (culled ? 1u : 2u); ++k) {
+                const CasterClass cls = k == 0 ? CasterClass::Closed : CasterClass::Open;
+                for (uint32_t i = 0; i < caster_count; ++i)
+                    if (casters[i].triangles > 0 && casters[i].caster_class == cls) setup(casters[i], culled ? 2 : k);
+            }
+            workDeferredCompute();
+            pending = 0;
+        };
+        pass(false);
+        if (options_.skips.closed_casters) pass(true);
+    }
+
+    void lightPassAndResolve(const BufferRange& lut_table, const DrawCasters& draw_casters, const SbsFrameBuffers& frame,
+                             const CasterBuffer* casters = nullptr, uint32_t caster_count = 0) {
         const bool has_sets = !frame.sets.empty();
         const LightLutSetup* lut = has_lut_ ? &lut_ : nullptr;
         // Slot 0: the predicate pass and the resolve; 1 + 6 b + c: list block b, c = 0 closed, 1 open,
@@ -757,138 +1047,142 @@ private:
                                                                size_t(options_.grid_width) * options_.grid_height) * 4),
                                       GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
-        glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
-        glDisable(GL_DEPTH_TEST);
-        glDisable(GL_CULL_FACE);
-        glDisable(GL_RASTERIZER_DISCARD);
-        glDisable(GL_STENCIL_TEST);  // the occupancy stencil's own state comes at (2c)
-        gl::setPassRasterState();
-        if (!timers_.empty()) timers_[1].begin();
-        // (2) Which list blocks does the longest list need? One point per block, on the GPU.
-        blocks_.use();
-        glBindVertexArray(empty_vao_.id());
-        bindParams(0);
-        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
-        gl::drawListBlockPredicates(block_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
-        // (2b) SoftSkips::silhouettes: mark the texels of every potential silhouette's region.
-        if (options_.skips.silhouettes) {
-            glClearNamedBufferSubData(marks_.id(), GL_R32UI, 0, static_cast<GLsizeiptr>(marks_.size()), GL_RED_INTEGER,
-                                      GL_UNSIGNED_INT, &zero);
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            silhouettes_.use();
-            bindParams(0);
+        if (options_.light_pass == SoftLightPass::Compute) {
+            if (!timers_.empty()) timers_[1].begin();
             gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
-            (*draw_adjacency_)();
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            // ... and the texels of view samples for which the oracle's coplanar rule opens a
-            // triangle's edges (SoftSkips::silhouettes' second condition): every triangle's region.
-            silhouettes_near_.use();
+            bindLightPass(masks, lut_table, frame);
+            computeLightPass(casters, caster_count);
+        } else {
+            glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
+            glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
+            glDisable(GL_DEPTH_TEST);
+            glDisable(GL_CULL_FACE);
+            glDisable(GL_RASTERIZER_DISCARD);
+            glDisable(GL_STENCIL_TEST);  // the occupancy stencil's own state comes at (2c)
+            gl::setPassRasterState();
+            if (!timers_.empty()) timers_[1].begin();
+            // (2) Which list blocks does the longest list need? One point per block, on the GPU.
+            blocks_.use();
+            glBindVertexArray(empty_vao_.id());
             bindParams(0);
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
-            (*draw_adjacency_)();
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
-        // (2c) SoftSkips::empty_blocks: the stencil counts each texel's non-empty list blocks.
-        const bool stencil = options_.skips.empty_blocks;
-        const uint32_t stencil_blocks = std::min(options_.max_list_blocks, gl::kOccupancyStencilBlocks);
-        if (stencil) {
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
-            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
-            gl::drawOccupancyStencil(framebuffer_.id(), occupancy_.id(), empty_vao_.id(), block_queries_, options_.max_list_blocks,
-                                     [&](uint32_t b) { bindParams(1 + kSlotsPerBlock * b + 1); });
-        }
-        // (3) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
-        // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
-        // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
-        const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
-        gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
-        bindLightPass(masks, lut_table, frame);
-        if (coverage_bits_.id() != 0) {
-            // coverage_texels: the occupancy bits the coverage pass reads (the lists are done).
-            coverage_bits_.use();
-            bindParams(0);
-            glDispatchCompute(coverage_bit_groups_, 1, 1);  // <= 8192 * 256 / 64 groups
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        }
-        light_pass_.use();
-        const bool complement = stencil && options_.count_work;
-        // The first pass: every list block, closed then open casters (and count_work's complement).
-        const auto first_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
-            for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-                glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
-                stencilTest(b, GL_LESS);
-                for (uint32_t c = 0; c < 2; ++c) {
-                    bindParams(1 + kSlotsPerBlock * b + c);
-                    program.use();
-                    draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
-                }
-                if (complement && b < stencil_blocks) {
-                    stencilTest(b, GL_GEQUAL);
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+            gl::drawListBlockPredicates(block_queries_, options_.max_list_blocks, options_.grid_width, options_.grid_height);
+            // (2b) SoftSkips::silhouettes: mark the texels of every potential silhouette's region.
+            if (options_.skips.silhouettes) {
+                glClearNamedBufferSubData(marks_.id(), GL_R32UI, 0, static_cast<GLsizeiptr>(marks_.size()), GL_RED_INTEGER,
+                                          GL_UNSIGNED_INT, &zero);
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+                silhouettes_.use();
+                bindParams(0);
+                gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.marks, marks_.id());
+                (*draw_adjacency_)();
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+                // ... and the texels of view samples for which the oracle's coplanar rule opens a
+                // triangle's edges (SoftSkips::silhouettes' second condition): every triangle's region.
+                silhouettes_near_.use();
+                bindParams(0);
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+                (*draw_adjacency_)();
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            }
+            // (2c) SoftSkips::empty_blocks: the stencil counts each texel's non-empty list blocks.
+            const bool stencil = options_.skips.empty_blocks;
+            const uint32_t stencil_blocks = std::min(options_.max_list_blocks, gl::kOccupancyStencilBlocks);
+            if (stencil) {
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+                gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+                gl::drawOccupancyStencil(framebuffer_.id(), occupancy_.id(), empty_vao_.id(), block_queries_, options_.max_list_blocks,
+                                         [&](uint32_t b) { bindParams(1 + kSlotsPerBlock * b + 1); });
+            }
+            // (3) Light pass, block by block; blocks no list needs are skipped by the GPU. With the
+            // stencil, block b's fragments are shaded where b < the texel's non-empty blocks (early
+            // fragment tests); count_work draws the rest too, so fragments_skipped counts them.
+            const auto stencilTest = [&](uint32_t b, GLenum func) { gl::occupancyStencilTest(stencil, b, func); };
+            gl::bindBase(GL_UNIFORM_BUFFER, bindings_.influence, influence_params_.id());
+            bindLightPass(masks, lut_table, frame);
+            if (coverage_bits_.id() != 0) {
+                // coverage_texels: the occupancy bits the coverage pass reads (the lists are done).
+                coverageBits();
+            }
+            light_pass_.use();
+            const bool complement = stencil && options_.count_work;
+            // The first pass: every list block, closed then open casters (and count_work's complement).
+            const auto first_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
+                for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                    glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
+                    stencilTest(b, GL_LESS);
                     for (uint32_t c = 0; c < 2; ++c) {
-                        bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 4));
+                        bindParams(1 + kSlotsPerBlock * b + c);
                         program.use();
                         draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
                     }
-                }
-                glEndConditionalRender();
-            }
-        };
-        // SoftSkips::closed_casters' second pass: the culled triangles, for the samples the first
-        // pass flagged near a kept closed one.
-        const auto culled_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
-            for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-                glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
-                for (GLenum func : {GLenum(GL_LESS), GLenum(GL_GEQUAL)}) {
-                    if (func == GL_GEQUAL && !(complement && b < stencil_blocks)) continue;
-                    stencilTest(b, func);
-                    bindParams(1 + kSlotsPerBlock * b + (func == GL_GEQUAL ? 5 : 2));
-                    program.use();
-                    draw_casters(CasterClass::Closed);
-                }
-                glEndConditionalRender();
-            }
-        };
-        first_pass(light_pass_, block_queries_);
-        workDeferredPairs(first_pass, masks, lut_table, frame);
-        if (options_.skips.closed_casters) {
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the first pass's near flags
-            if (stencil) {
-                // The occupancy stencil drops to 0 on the texels without a flagged sample: the
-                // second pass's fragments there would only return (light_pass.frag.glsl).
-                near_stencil_.use();
-                glBindVertexArray(empty_vao_.id());
-                bindParams(1 + 2);
-                glEnable(GL_STENCIL_TEST);
-                glStencilMask(0xFFu);
-                glStencilFunc(GL_ALWAYS, 0, 0xFFu);
-                glStencilOp(GL_KEEP, GL_KEEP, GL_ZERO);
-                glDrawArrays(GL_TRIANGLES, 0, 3);
-                glStencilMask(0u);
-                glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-            }
-            // Its predicates (count_work draws it whole, counting its fragments): list block b holds
-            // a flagged sample somewhere. Usually none does, and the pass draws nothing.
-            if (!options_.count_work) {
-                glDisable(GL_STENCIL_TEST);
-                near_blocks_.use();
-                glBindVertexArray(empty_vao_.id());
-                for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
-                    glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
-                    glBeginQuery(GL_ANY_SAMPLES_PASSED, near_queries_[b].id());
-                    bindParams(1 + kSlotsPerBlock * b + 2);
-                    glDrawArrays(GL_TRIANGLES, 0, 3);
-                    glEndQuery(GL_ANY_SAMPLES_PASSED);
+                    if (complement && b < stencil_blocks) {
+                        stencilTest(b, GL_GEQUAL);
+                        for (uint32_t c = 0; c < 2; ++c) {
+                            bindParams(1 + kSlotsPerBlock * b + (c == 0 ? 3 : 4));
+                            program.use();
+                            draw_casters(c == 0 ? CasterClass::Closed : CasterClass::Open);
+                        }
+                    }
                     glEndConditionalRender();
                 }
+            };
+            // SoftSkips::closed_casters' second pass: the culled triangles, for the samples the first
+            // pass flagged near a kept closed one.
+            const auto culled_pass = [&](const gl::Program& program, const std::vector<gl::OcclusionQuery>& queries) {
+                for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                    glBeginConditionalRender(queries[b].id(), GL_QUERY_WAIT);
+                    for (GLenum func : {GLenum(GL_LESS), GLenum(GL_GEQUAL)}) {
+                        if (func == GL_GEQUAL && !(complement && b < stencil_blocks)) continue;
+                        stencilTest(b, func);
+                        bindParams(1 + kSlotsPerBlock * b + (func == GL_GEQUAL ? 5 : 2));
+                        program.use();
+                        draw_casters(CasterClass::Closed);
+                    }
+                    glEndConditionalRender();
+                }
+            };
+            first_pass(light_pass_, block_queries_);
+            workDeferredPairs(first_pass, masks, lut_table, frame);
+            if (options_.skips.closed_casters) {
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the first pass's near flags
+                if (stencil) {
+                    // The occupancy stencil drops to 0 on the texels without a flagged sample: the
+                    // second pass's fragments there would only return (light_pass.frag.glsl).
+                    near_stencil_.use();
+                    glBindVertexArray(empty_vao_.id());
+                    bindParams(1 + 2);
+                    glEnable(GL_STENCIL_TEST);
+                    glStencilMask(0xFFu);
+                    glStencilFunc(GL_ALWAYS, 0, 0xFFu);
+                    glStencilOp(GL_KEEP, GL_KEEP, GL_ZERO);
+                    glDrawArrays(GL_TRIANGLES, 0, 3);
+                    glStencilMask(0u);
+                    glStencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+                }
+                // Its predicates (count_work draws it whole, counting its fragments): list block b holds
+                // a flagged sample somewhere. Usually none does, and the pass draws nothing.
+                if (!options_.count_work) {
+                    glDisable(GL_STENCIL_TEST);
+                    near_blocks_.use();
+                    glBindVertexArray(empty_vao_.id());
+                    for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                        glBeginConditionalRender(block_queries_[b].id(), GL_QUERY_WAIT);
+                        glBeginQuery(GL_ANY_SAMPLES_PASSED, near_queries_[b].id());
+                        bindParams(1 + kSlotsPerBlock * b + 2);
+                        glDrawArrays(GL_TRIANGLES, 0, 3);
+                        glEndQuery(GL_ANY_SAMPLES_PASSED);
+                        glEndConditionalRender();
+                    }
+                }
+                culled_pass(light_pass_, options_.count_work ? block_queries_ : near_queries_);
+                workDeferredPairs(culled_pass, masks, lut_table, frame);
             }
-            culled_pass(light_pass_, options_.count_work ? block_queries_ : near_queries_);
-            workDeferredPairs(culled_pass, masks, lut_table, frame);
+            glDisable(GL_STENCIL_TEST);
         }
-        glDisable(GL_STENCIL_TEST);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         if (!timers_.empty()) timers_[1].end();
         // (4) Resolve.

@@ -17,6 +17,7 @@
 #include "penumbra/adjacency.hpp"
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/shader.hpp"
+#include "penumbra/pipelines/caster_class.hpp"
 #include "penumbra/scene/scene.hpp"
 
 #include <glm/gtc/type_ptr.hpp>
@@ -68,6 +69,23 @@ public:
         vertices_ = gl::Buffer::fromVector(vertices);
         indices_ = gl::Buffer::fromVector(indices);
         face_normals_ = gl::Buffer::fromVector(faces);
+        // The casters as buffers, one index buffer per class (meshes in order).
+        for (int k = 0; k < 2; ++k) {
+            std::vector<uint32_t> class_indices;
+            for (const Range& r : ranges_)
+                if (r.closed == (k == 0))
+                    class_indices.insert(class_indices.end(), indices.begin() + r.first_index,
+                                         indices.begin() + r.first_index + r.index_count);
+            if (class_indices.empty()) continue;
+            class_indices_[k] = gl::Buffer::fromVector(class_indices);
+            CasterBuffer c;
+            c.positions = {vertices_.id(), 0, vertices_.size()};
+            c.stride = 6 * sizeof(float);
+            c.indices = {class_indices_[k].id(), 0, class_indices_[k].size()};
+            c.triangles = static_cast<uint32_t>(class_indices.size() / 3);
+            c.caster_class = k == 0 ? CasterClass::Closed : CasterClass::Open;
+            caster_buffers_.push_back(c);
+        }
         // Triangles with adjacency (by position), for the soft pipeline's silhouette skip.
         const std::vector<uint32_t> adjacency =
             penumbra::triangleAdjacency(positions_.data(), positions_.size(), indices.data(), indices.size());
@@ -95,6 +113,8 @@ public:
           indices_(std::move(other.indices_)),
           face_normals_(std::move(other.face_normals_)),
           adjacency_(std::move(other.adjacency_)),
+          class_indices_{std::move(other.class_indices_[0]), std::move(other.class_indices_[1])},
+          caster_buffers_(std::move(other.caster_buffers_)),
           vao_(std::exchange(other.vao_, 0)),
           adjacency_vao_(std::exchange(other.adjacency_vao_, 0)),
           index_count_(other.index_count_),
@@ -116,6 +136,9 @@ public:
     uint32_t indexCount() const { return index_count_; }
     uint32_t triangleCount() const { return index_count_ / 3; }
     const std::vector<Range>& ranges() const { return ranges_; }
+    /// The casters as buffers (SoftLightPass::Compute): the closed meshes' triangles, then the
+    /// others', each class in one index buffer (absent when it has none).
+    const std::vector<CasterBuffer>& casterBuffers() const { return caster_buffers_; }
     /// All vertex positions / indices as uploaded (global ids), for CPU twins and the oracle.
     const std::vector<glm::vec3>& positions() const { return positions_; }
     const std::vector<uint32_t>& indices() const { return cpu_indices_; }
@@ -148,6 +171,8 @@ public:
 
 private:
     gl::Buffer vertices_, indices_, face_normals_, adjacency_;
+    gl::Buffer class_indices_[2];  // closed, open
+    std::vector<CasterBuffer> caster_buffers_;
     GLuint vao_ = 0, adjacency_vao_ = 0;
     uint32_t index_count_ = 0;
     std::vector<Range> ranges_;
