@@ -602,23 +602,26 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
 
 /// SampleBasedSoftGpuOptions::coverage_texels: the small regions covered by the coverage pass
 /// (the default) against every region drawn, exact and lut at N = 256, interleaved.
-void BM_SoftShadowsCoverage(benchmark::State& state) {
+/// Ours against another configuration of ours (`make(v, c, mode, other)`), exact and lut, all four
+/// interleaved: <counter>_speedup = ms_<other> / ms, <counter>_speedup_lut = ms_lut_<other> / ms_lut.
+template <class Make>
+void oursAgainst(benchmark::State& state, const std::string& other, const std::string& counter, const Make& make) {
     if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const uint32_t tessellation = sizes().tessellation;
         const View& v = view(tessellation);
         const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
-        Ours covered(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
-        Ours drawn(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false, 0);
-        Ours covered_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
-        Ours drawn_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false, 0);
+        Ours ours = make(v, c, SoftMode::Exact, false);
+        Ours theirs = make(v, c, SoftMode::Exact, true);
+        Ours ours_lut = make(v, c, SoftMode::Lut, false);
+        Ours theirs_lut = make(v, c, SoftMode::Lut, true);
         const std::vector<double> ms = timeOurs(
-            state, {{"", &covered}, {"drawn", &drawn}, {"lut", &covered_lut}, {"lut_drawn", &drawn_lut}},
+            state, {{"", &ours}, {other, &theirs}, {"lut", &ours_lut}, {"lut_" + other, &theirs_lut}},
             {&c.truth, &c.truth, &c.truth, &c.truth});
         if (ms.empty()) return;
-        state.counters["coverage_speedup"] = ratio(ms[1], ms[0]);
-        state.counters["coverage_speedup_lut"] = ratio(ms[3], ms[2]);
+        state.counters[counter + "_speedup"] = ratio(ms[1], ms[0]);
+        state.counters[counter + "_speedup_lut"] = ratio(ms[3], ms[2]);
         setScene(state, v, kBaselineSamples);
         leaveNoBindings();
     } catch (const std::exception& e) {
@@ -626,31 +629,19 @@ void BM_SoftShadowsCoverage(benchmark::State& state) {
     }
 }
 
+void BM_SoftShadowsCoverage(benchmark::State& state) {
+    oursAgainst(state, "drawn", "coverage", [](const View& v, const LightConfig& c, SoftMode mode, bool drawn) {
+        return Ours(v, c, lut(c.sets, c.tolerance), mode, false, drawn ? 0u : penumbra::SampleBasedSoftGpuOptions{}.coverage_texels);
+    });
+}
+
 /// SoftLightPass::Compute against Raster (each with its defaults: the coverage pass for small
 /// regions), exact and lut, interleaved.
 void BM_SoftShadowsCompute(benchmark::State& state) {
-    if (sizesRejected(state)) return;
-    penumbra::bench::glContext();
-    try {
-        const uint32_t tessellation = sizes().tessellation;
-        const View& v = view(tessellation);
-        const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
-        const uint32_t texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels;
-        Ours compute(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false, texels, penumbra::SoftLightPass::Compute);
-        Ours raster(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
-        Ours compute_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false, texels, penumbra::SoftLightPass::Compute);
-        Ours raster_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
-        const std::vector<double> ms = timeOurs(
-            state, {{"", &compute}, {"raster", &raster}, {"lut", &compute_lut}, {"lut_raster", &raster_lut}},
-            {&c.truth, &c.truth, &c.truth, &c.truth});
-        if (ms.empty()) return;
-        state.counters["compute_speedup"] = ratio(ms[1], ms[0]);
-        state.counters["compute_speedup_lut"] = ratio(ms[3], ms[2]);
-        setScene(state, v, kBaselineSamples);
-        leaveNoBindings();
-    } catch (const std::exception& e) {
-        state.SkipWithError(e.what());
-    }
+    oursAgainst(state, "raster", "compute", [](const View& v, const LightConfig& c, SoftMode mode, bool raster) {
+        return Ours(v, c, lut(c.sets, c.tolerance), mode, false, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels,
+                    raster ? penumbra::SoftLightPass::Raster : penumbra::SoftLightPass::Compute);
+    });
 }
 
 /// sintorn2008 §5's alternative: one shadow map per light sample, averaged; ours timed with it.

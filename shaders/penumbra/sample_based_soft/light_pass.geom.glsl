@@ -73,9 +73,11 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #if PENUMBRA_SBS_DEFERRED
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) writeonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
+#define PENUMBRA_SBS_TRIANGLES_WRITABLE 1
 #endif
 
 #include "penumbra/influence_region/influence_region.glsl"
+#include "penumbra/sample_based_soft/triangle_store.glsl"
 
 #if !PENUMBRA_SBS_DEFERRED
 layout(location = 0) flat out vec3 penumbraSbsVertex0;
@@ -91,27 +93,18 @@ layout(location = 8) flat out vec2 penumbraSbsWedgeMargin;
 void main() {
     const vec3 v0 = gl_in[0].gl_Position.xyz, v1 = gl_in[1].gl_Position.xyz, v2 = gl_in[2].gl_Position.xyz;
     if (penumbraAfhDegenerate(dvec3(v0), dvec3(v1), dvec3(v2))) return;
-    if ((penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULL_CLOSED) != 0u) {
-        // SoftSkips::closed_casters: of a closed caster, a triangle with the whole light strictly
-        // behind its plane is never the face a blocked segment leaves the solid through: culled.
-        const PenumbraSbsCasterPlane c =
-            penumbraSbsCasterPlane(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz, penumbraSbsParams.bounds.x);
-        // The second pass (PENUMBRA_SBS_FLAG_CULLED_PASS) draws exactly the culled ones, for the
-        // samples within the oracle's coplanar reach of a kept closed triangle.
-        const bool culled_pass = (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u;
-        const bool away = penumbraSbsCasterFacesAway(c);
-        if (away != culled_pass) {
+    bool away;  // SoftSkips::closed_casters (triangle_store.glsl)
+    if (penumbraSbsClosedSkips(v0, v1, v2, away)) {
 #if PENUMBRA_SBS_COUNT_WORK
-            if (away && penumbraSbsParams.grid.w == 0u && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
+        if (away && penumbraSbsParams.grid.w == 0u && (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_COMPLEMENT) == 0u) {
 #if PENUMBRA_SBS_DEFERRED
-                atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+            atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PENDING + PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
 #else
-                atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
+            atomicAdd(penumbraSbsWork[PENUMBRA_SBS_WORK_TRIANGLES_CULLED], 1u);
 #endif
-            }
-#endif
-            return;
         }
+#endif
+        return;
     }
     const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
     if (count <= 0) return;
@@ -130,17 +123,11 @@ void main() {
         const uint slots = uint(penumbraSbsTriangles.length()) / PENUMBRA_SBS_TRIANGLE_WORDS;
 #endif
         if (k < slots) {
-            // The vertices' bits, then the draw's list block and flags (what the compute pass needs
-            // of this draw's parameter block).
             slot = k;
-            const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * k;
-            const vec3 v[3] = vec3[3](v0, v1, v2);
-            for (uint i = 0u; i < 9u; ++i) penumbraSbsTriangles[base + i] = floatBitsToUint(v[i / 3u][i % 3u]);
-            penumbraSbsTriangles[base + 9u] = penumbraSbsParams.grid.w | penumbraSbsParams.reserved.y << 16u;
 #if PENUMBRA_SBS_WEDGES
-            for (uint i = 0u; i < 16u; ++i) penumbraSbsTriangles[base + 10u + i] = floatBitsToUint(wedges.planes[i / 4u][i % 4u]);
-            penumbraSbsTriangles[base + 26u] = floatBitsToUint(wedges.margin.x);
-            penumbraSbsTriangles[base + 27u] = floatBitsToUint(wedges.margin.y);
+            penumbraSbsStoreSlot(k, v0, v1, v2, penumbraSbsParams.grid.w, wedges);
+#else
+            penumbraSbsStoreSlot(k, v0, v1, v2, penumbraSbsParams.grid.w);
 #endif
         }
     }
@@ -160,13 +147,7 @@ void main() {
         if (extent.x * extent.y <= float(PENUMBRA_SBS_REGION_MAX_TEXELS)) {
             const uint r = atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS], 1u);
             if (r < uint(PENUMBRA_SBS_REGION_CAPACITY)) {
-                const uint base = uint(PENUMBRA_SBS_REGION_BASE) + PENUMBRA_SBS_REGION_WORDS(PENUMBRA_INFLUENCE_SIDES) * r;
-                penumbraSbsTriangles[base] = slot;
-                penumbraSbsTriangles[base + 1u] = uint(count);
-                for (int j = 0; j < count; ++j) {
-                    penumbraSbsTriangles[base + 2u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].x);
-                    penumbraSbsTriangles[base + 3u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].y);
-                }
+                penumbraSbsStoreRecord(r, slot, count);
                 return;
             }
         }

@@ -59,9 +59,11 @@ layout(std430, binding = PENUMBRA_SBS_HEADER_BINDING) readonly buffer PenumbraSb
 };
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) writeonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
+#define PENUMBRA_SBS_TRIANGLES_WRITABLE 1
 
 #include "penumbra/influence_region/influence_region.glsl"
 #include "penumbra/sample_based_soft/caster_buffer.glsl"
+#include "penumbra/sample_based_soft/triangle_store.glsl"
 
 #if PENUMBRA_SBS_SETUP_GATE
 layout(location = 2) uniform uint penumbraSbsSetupBlocks;  // list blocks this dispatch may cover
@@ -97,21 +99,12 @@ void main() {
     }
     const vec3 v0 = v[0], v1 = v[1], v2 = v[2];
     if (penumbraAfhDegenerate(dvec3(v0), dvec3(v1), dvec3(v2))) return;
-    if ((penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULL_CLOSED) != 0u) {
-        // SoftSkips::closed_casters, as the geometry stage: the first pass keeps the triangles that
-        // do not face away from the whole light, the second (PENUMBRA_SBS_FLAG_CULLED_PASS) exactly
-        // the others.
-        const PenumbraSbsCasterPlane c =
-            penumbraSbsCasterPlane(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz, penumbraSbsParams.bounds.x);
-        const bool culled_pass = (penumbraSbsParams.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u;
-        const bool away = penumbraSbsCasterFacesAway(c);
-        if (away != culled_pass) {
+    bool away;  // SoftSkips::closed_casters, as the geometry stage (triangle_store.glsl)
+    if (penumbraSbsClosedSkips(v0, v1, v2, away)) {
 #if PENUMBRA_SBS_COUNT_WORK
-            if (away && list_block == 0u)
-                atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP], 1u);
+        if (away && list_block == 0u) atomicAdd(penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP], 1u);
 #endif
-            return;
-        }
+        return;
     }
     const int count = penumbraInfluenceRegion(v0, v1, v2, penumbraSbsInfluence);
     if (count <= 0) return;
@@ -122,22 +115,13 @@ void main() {
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] = 1u;  // never, by the host's chunks; loud if it were
         return;
     }
-    const uint base = PENUMBRA_SBS_TRIANGLE_WORDS * k;
-    for (uint i = 0u; i < 9u; ++i) penumbraSbsTriangles[base + i] = floatBitsToUint(v[i / 3u][i % 3u]);
-    penumbraSbsTriangles[base + 9u] = list_block | penumbraSbsParams.reserved.y << 16u;
 #if PENUMBRA_SBS_WEDGES
-    const PenumbraSbsWedges wedges = penumbraSbsWedgePlanes(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz,
-                                                            penumbraSbsParams.epsilon.w, penumbraSbsParams.epsilon.z);
-    for (uint i = 0u; i < 16u; ++i) penumbraSbsTriangles[base + 10u + i] = floatBitsToUint(wedges.planes[i / 4u][i % 4u]);
-    penumbraSbsTriangles[base + 26u] = floatBitsToUint(wedges.margin.x);
-    penumbraSbsTriangles[base + 27u] = floatBitsToUint(wedges.margin.y);
+    penumbraSbsStoreSlot(k, v0, v1, v2, list_block,
+                         penumbraSbsWedgePlanes(dvec3(v0), dvec3(v1), dvec3(v2), penumbraSbsParams.center.xyz,
+                                                penumbraSbsParams.epsilon.w, penumbraSbsParams.epsilon.z));
+#else
+    penumbraSbsStoreSlot(k, v0, v1, v2, list_block);
 #endif
-    const uint record = uint(PENUMBRA_SBS_REGION_BASE) + PENUMBRA_SBS_REGION_WORDS(PENUMBRA_INFLUENCE_SIDES) * r;
-    penumbraSbsTriangles[record] = k;
-    penumbraSbsTriangles[record + 1u] = uint(count);
-    for (int j = 0; j < count; ++j) {
-        penumbraSbsTriangles[record + 2u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].x);
-        penumbraSbsTriangles[record + 3u + 2u * uint(j)] = floatBitsToUint(penumbraInfluenceOut[j].y);
-    }
+    penumbraSbsStoreRecord(r, k, count);
 }
 #endif

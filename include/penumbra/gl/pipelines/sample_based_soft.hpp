@@ -571,16 +571,7 @@ public:
     /// returns a Status and does nothing.
     Status run(const SampleBufferInput& input, uint32_t sample_count, const BufferRange& lut_table, const CasterBuffer* casters,
                uint32_t caster_count, const SbsFrameBuffers& frame = {}) {
-        const Status c = checkCasters(casters, caster_count);
-        if (c != Status::Ok) return c;
-        const Status s = begin(sample_count, lut_table, true, frame, nullptr);
-        if (s != Status::Ok) return s;
-        if (!timers_.empty()) timers_[0].begin();
-        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
-        if (!timers_.empty()) timers_[0].end();
-        if (built != Status::Ok) return built;
-        lightPassAndResolve(lut_table, {}, frame, casters, caster_count);
-        return Status::Ok;
+        return runCompute(input, sample_count, lut_table, casters, caster_count, frame);
     }
 
     /// SoftLightPass::Compute, depth input (as the DrawCasters overload).
@@ -588,16 +579,7 @@ public:
                const SbsFrameBuffers& frame = {}) {
         const uint64_t n = uint64_t(input.view.width) * input.view.height;
         if (n > reserved_) return fail(Status::NotReserved);
-        const Status c = checkCasters(casters, caster_count);
-        if (c != Status::Ok) return c;
-        const Status s = begin(static_cast<uint32_t>(n), lut_table, true, frame, nullptr);
-        if (s != Status::Ok) return s;
-        if (!timers_.empty()) timers_[0].begin();
-        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
-        if (!timers_.empty()) timers_[0].end();
-        if (built != Status::Ok) return built;
-        lightPassAndResolve(lut_table, {}, frame, casters, caster_count);
-        return Status::Ok;
+        return runCompute(input, static_cast<uint32_t>(n), lut_table, casters, caster_count, frame);
     }
 
     /// Load-time check of CasterBuffer ranges against their buffers (GL queries; throws naming the
@@ -758,6 +740,22 @@ private:
     static Status fail(Status s) {
         PENUMBRA_ASSERT(s == Status::Ok && "penumbra::SampleBasedSoftShadows: per-frame misuse (see the returned Status)");
         return s;
+    }
+
+    /// The compute light pass's run() for either input.
+    template <class Input>
+    Status runCompute(const Input& input, uint32_t sample_count, const BufferRange& lut_table, const CasterBuffer* casters,
+                      uint32_t caster_count, const SbsFrameBuffers& frame) {
+        const Status c = checkCasters(casters, caster_count);
+        if (c != Status::Ok) return c;
+        const Status s = begin(sample_count, lut_table, true, frame, nullptr);
+        if (s != Status::Ok) return s;
+        if (!timers_.empty()) timers_[0].begin();
+        const Status built = builder_.build(setup_, light_, input, buffers(), listOptions(), listBuild());
+        if (!timers_.empty()) timers_[0].end();
+        if (built != Status::Ok) return built;
+        lightPassAndResolve(lut_table, {}, frame, casters, caster_count);
+        return Status::Ok;
     }
 
     /// Triangles per CasterBuffer at most (3 corners each stay below 2^32).
