@@ -73,6 +73,26 @@ Tally compare(const penumbra::SampleBasedSoftCpuResult& result, const penumbra::
 
 namespace {
 
+/// One set of n samples of `light` (seed 11), its certified 64^3 LUT and the LUT's words.
+struct CertifiedLight {
+    penumbra::LightSampleSets sets;
+    penumbra::LightLutSetup lut;
+    std::vector<uint32_t> words;
+
+    CertifiedLight(const penumbra::Light& light, uint32_t n) {
+        penumbra::LightSampleOptions sample_options;
+        sample_options.count = n;
+        sample_options.sets = 1;
+        sample_options.seed = 11;
+        sets = penumbra::makeLightSampleSets(light, sample_options);
+        penumbra::LightLutOptions lut_options;
+        lut_options.resolution = 64;
+        lut_options.certified = true;
+        lut = penumbra::lightLutSetup(sets, lut_options);
+        words = penumbra::generateLightLut(lut);
+    }
+};
+
 void equalsOracle(bool stress) {
     const uint32_t seed = penumbra::test::testSeed();
     std::vector<Case> cases;
@@ -91,16 +111,10 @@ void equalsOracle(bool stress) {
             penumbra::Light light;
             light.center = dvec3(c.scene.light.position);
             light.size = dvec3(double(c.scene.light.radius));
-            penumbra::LightSampleOptions sample_options;
-            sample_options.count = n;
-            sample_options.sets = 1;
-            sample_options.seed = 11;
-            const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
-            penumbra::LightLutOptions lut_options;
-            lut_options.resolution = 64;
-            lut_options.certified = true;
-            const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
-            const std::vector<uint32_t> words = penumbra::generateLightLut(lut);
+            const CertifiedLight certified(light, n);
+            const penumbra::LightSampleSets& sets = certified.sets;
+            const penumbra::LightLutSetup& lut = certified.lut;
+            const std::vector<uint32_t>& words = certified.words;
 
             const std::vector<glm::vec3> points = surfacePoints(mesh, receiver_count, seed + n);
             const penumbra::SoftCasters casters{mesh.positions.data(), mesh.positions.size(), mesh.indices.data(),
@@ -195,16 +209,10 @@ TEST_CASE("sample-based soft (CPU twin): far lights with scene_extent = the orac
         penumbra::Light light;
         light.center = direction * distance;
         light.size = dvec3(distance * 1e-2);
-        penumbra::LightSampleOptions sample_options;
-        sample_options.count = 128;
-        sample_options.sets = 1;
-        sample_options.seed = 11;
-        const penumbra::LightSampleSets sets = penumbra::makeLightSampleSets(light, sample_options);
-        penumbra::LightLutOptions lut_options;
-        lut_options.resolution = 64;
-        lut_options.certified = true;
-        const penumbra::LightLutSetup lut = penumbra::lightLutSetup(sets, lut_options);
-        const std::vector<uint32_t> words = penumbra::generateLightLut(lut);
+        const CertifiedLight certified(light, 128);
+        const penumbra::LightSampleSets& sets = certified.sets;
+        const penumbra::LightLutSetup& lut = certified.lut;
+        const std::vector<uint32_t>& words = certified.words;
         const penumbra::reference::VisibilityResult truth = oracle.evaluate(
             std::vector<dvec3>(points.begin(), points.end()), std::vector<dvec3>(sets.worldSet(0), sets.worldSet(0) + 128),
             oracle_options);
