@@ -1,6 +1,6 @@
 # Runs soft_shadows with ARGS ('|'-separated) and checks its exit code (EXPECT: 0, 1 = a failed
 # check, or fail = 2, a usage error) and that stdout+stderr match REGEX. A failing run must leave no x.* in OUT_DIR
-# (its checks come before any work). Invoked by ctest (examples/CMakeLists.txt).
+# (its checks come before any work); OUT_DIR is the case's own folder. Invoked by ctest (examples/CMakeLists.txt).
 string(REPLACE "|" ";" args "${ARGS}")
 file(MAKE_DIRECTORY "${OUT_DIR}")
 file(GLOB stale "${OUT_DIR}/x*")

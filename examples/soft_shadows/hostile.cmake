@@ -11,9 +11,12 @@ file(MAKE_DIRECTORY "${hostile_objs}" "${hostile_out}/folder.png")
 # (usage errors and the CPU modes); egl cases run the GPU pipelines on EGL.
 function(soft_shadows_hostile name backend expect regex)
     string(REPLACE ";" "|" cli_args "${ARGN}")
+    # Each case's x.* in a folder of its own: --out is probed by creating the file and removing it,
+    # which a concurrent case's "nothing written" check would otherwise see.
+    string(REPLACE "${hostile_out}/x" "${hostile_out}/${name}/x" cli_args "${cli_args}")
     add_test(NAME soft_shadows.hostile.${name}
              COMMAND ${CMAKE_COMMAND} -DEXE=$<TARGET_FILE:soft_shadows> "-DARGS=${cli_args}" -DEXPECT=${expect}
-                     "-DREGEX=${regex}" -DOUT_DIR=${hostile_out}
+                     "-DREGEX=${regex}" -DOUT_DIR=${hostile_out}/${name}
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/soft_shadows/check_cli.cmake)
     if(backend STREQUAL "cpu")
         set(labels "cpu;example;hostile")
