@@ -602,8 +602,9 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
 
 /// SampleBasedSoftGpuOptions::coverage_texels: the small regions covered by the coverage pass
 /// (the default) against every region drawn, exact and lut at N = 256, interleaved.
-/// Ours against another configuration of ours (`make(v, c, mode, other)`), exact and lut, all four
-/// interleaved: <counter>_speedup = ms_<other> / ms, <counter>_speedup_lut = ms_lut_<other> / ms_lut.
+/// Ours against another configuration of ours (`make(v, c, mode, other, count_work)`), exact and lut, all four
+/// interleaved: <counter>_speedup = ms_<other> / ms, <counter>_speedup_lut = ms_lut_<other> / ms_lut; work_*: ours
+/// (exact) counted in one more run.
 template <class Make>
 void oursAgainst(benchmark::State& state, const std::string& other, const std::string& counter, const Make& make) {
     if (sizesRejected(state)) return;
@@ -612,16 +613,26 @@ void oursAgainst(benchmark::State& state, const std::string& other, const std::s
         const uint32_t tessellation = sizes().tessellation;
         const View& v = view(tessellation);
         const LightConfig& c = lightConfig(tessellation, 100, kBaselineSamples);
-        Ours ours = make(v, c, SoftMode::Exact, false);
-        Ours theirs = make(v, c, SoftMode::Exact, true);
-        Ours ours_lut = make(v, c, SoftMode::Lut, false);
-        Ours theirs_lut = make(v, c, SoftMode::Lut, true);
+        Ours ours = make(v, c, SoftMode::Exact, false, false);
+        Ours theirs = make(v, c, SoftMode::Exact, true, false);
+        Ours ours_lut = make(v, c, SoftMode::Lut, false, false);
+        Ours theirs_lut = make(v, c, SoftMode::Lut, true, false);
         const std::vector<double> ms = timeOurs(
             state, {{"", &ours}, {other, &theirs}, {"lut", &ours_lut}, {"lut_" + other, &theirs_lut}},
             {&c.truth, &c.truth, &c.truth, &c.truth});
         if (ms.empty()) return;
         state.counters[counter + "_speedup"] = ratio(ms[1], ms[0]);
         state.counters[counter + "_speedup_lut"] = ratio(ms[3], ms[2]);
+        {  // work counters of ours (exact), from a counting run after the timed ones
+            Ours counted = make(v, c, SoftMode::Exact, false, true);
+            counted.run();
+            const penumbra::SampleBasedSoftFrame f = counted.pipeline.readFrame();
+            state.counters["list_blocks"] = double(f.passes);  // blocks the longest list needed
+            state.counters["work_fragments"] = double(f.fragments);
+            state.counters["work_pairs"] = double(f.pairs_deferred);
+            state.counters["work_pairs_wedged"] = double(f.pairs_wedged);
+            state.counters["work_exact_tests"] = double(f.exact_tests);
+        }
         setScene(state, v, kBaselineSamples);
         leaveNoBindings();
     } catch (const std::exception& e) {
@@ -630,16 +641,16 @@ void oursAgainst(benchmark::State& state, const std::string& other, const std::s
 }
 
 void BM_SoftShadowsCoverage(benchmark::State& state) {
-    oursAgainst(state, "drawn", "coverage", [](const View& v, const LightConfig& c, SoftMode mode, bool drawn) {
-        return Ours(v, c, lut(c.sets, c.tolerance), mode, false, drawn ? 0u : penumbra::SampleBasedSoftGpuOptions{}.coverage_texels);
+    oursAgainst(state, "drawn", "coverage", [](const View& v, const LightConfig& c, SoftMode mode, bool drawn, bool count_work) {
+        return Ours(v, c, lut(c.sets, c.tolerance), mode, count_work, drawn ? 0u : penumbra::SampleBasedSoftGpuOptions{}.coverage_texels);
     });
 }
 
 /// SoftLightPass::Compute against Raster (each with its defaults: the coverage pass for small
 /// regions), exact and lut, interleaved.
 void BM_SoftShadowsCompute(benchmark::State& state) {
-    oursAgainst(state, "raster", "compute", [](const View& v, const LightConfig& c, SoftMode mode, bool raster) {
-        return Ours(v, c, lut(c.sets, c.tolerance), mode, false, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels,
+    oursAgainst(state, "raster", "compute", [](const View& v, const LightConfig& c, SoftMode mode, bool raster, bool count_work) {
+        return Ours(v, c, lut(c.sets, c.tolerance), mode, count_work, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels,
                     raster ? penumbra::SoftLightPass::Raster : penumbra::SoftLightPass::Compute);
     });
 }
