@@ -10,11 +10,10 @@
 #      JIT frees with free() what it allocated with a nothrow new), then the demo on the hostile
 #      inputs (label `hostile`: every mode at small sizes, bad flags and OBJ files). That tree
 #      builds only what these runs execute (PENUMBRA_BUILD_EXTRAS=OFF: no readme_examples, gl_info,
-#      light_lut_error, obj_fuzz), and skips the entries whose sanitized part another entry of the
-#      same run already covers or that run no code of this tree: shader_glslang_test (its harness
-#      -- catalog, permutations, assembly, coverage -- is shader_gl_test's, which runs; the rest is
-#      the external glslangValidator) and consumer_epoxy (its own unsanitized project, built and
-#      run the same in the main run).
+#      light_lut_error, obj_fuzz, nor the checks of compilers and flags: no_gl_headers_test,
+#      shader_glslang_test -- its harness is shader_gl_test's, which runs; the rest is the external
+#      glslangValidator --, twin_digest_fp_contract, conservative_raster_twin_bits), and skips
+#      consumer_epoxy (its own unsanitized project, built and run the same in the main run).
 # Environment: PENUMBRA_BUILD_DIR (default build), PENUMBRA_SANITIZE_BUILD_DIR (default
 # <build dir>-sanitize), PENUMBRA_SKIP_SANITIZE=1 to skip step 2.
 set -euo pipefail
@@ -42,7 +41,7 @@ if [ "${PENUMBRA_SKIP_SANITIZE:-0}" != 1 ]; then
   phase "sanitizer build"
   echo "== sanitizer run (ASan+UBSan, CPU tests) =="
   (cd "$asan" && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-     ctest --output-on-failure -j"$jobs" -L cpu -LE "stress|example" -E '^shader_glslang_test$')
+     ctest --output-on-failure -j"$jobs" -L cpu -LE "stress|example")
   phase "sanitizer CPU run"
   echo "== sanitizer run (ASan+UBSan, GL tests on EGL) =="
   # alloc_dealloc_mismatch=0: Mesa's LLVM (libLLVM-15) frees with free() what it allocated with a
