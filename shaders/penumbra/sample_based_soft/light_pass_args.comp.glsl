@@ -15,12 +15,17 @@
 // group counts again for its program that works the pairs itself, when kind 0 found an overflow
 // (else 0 groups), its z the texels of a tile (PENUMBRA_SBS_ARGS_TILE_TEXELS); kind 5 (after the
 // coverage pass's tile counts and their scan): its (record, tile) items and group counts, folded
-// into x and y.
+// into x and y. Kind 3 with PENUMBRA_SBS_ARGS_ROUND=1 (the compute light pass, first of a run of
+// the deferred passes): when nothing waits for them (no record, slot, pair, fragment or setup count
+// since their last run, as after setup runs of list blocks no list reaches) it zeroes every pass's
+// group counts and the round's (PENUMBRA_SBS_DEFERRAL_ROUND_ARGS), with which the host dispatches
+// the run's other one-invocation programs and the scan: an idle run costs one invocation.
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY=256u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=4 PENUMBRA_SBS_ARGS_TILE_TEXELS=256u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=5 PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_TILE_BASE=0u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
@@ -65,6 +70,9 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #ifndef PENUMBRA_SBS_ARGS_GROUP
 #define PENUMBRA_SBS_ARGS_GROUP PENUMBRA_SBS_DEFERRAL_GROUP
 #endif
+#ifndef PENUMBRA_SBS_ARGS_ROUND
+#define PENUMBRA_SBS_ARGS_ROUND 0
+#endif
 
 #if PENUMBRA_SBS_ARGS_KIND == 5
 // The coverage pass's tile counts and first items (light_pass_coverage.comp.glsl).
@@ -89,6 +97,22 @@ void main() {
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 1] = x == 0u ? 1u : (groups + x - 1u) / x;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 2] = 1u;
 #elif PENUMBRA_SBS_ARGS_KIND != 0
+#if PENUMBRA_SBS_ARGS_ROUND
+    const bool waiting = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS] != 0u || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TRIANGLES] != 0u ||
+                         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_PAIRS] != 0u || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENTS] != 0u ||
+                         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_OVERFLOW] != 0u || penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP] != 0u ||
+                         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SETUP + 1] != 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS] = waiting ? 1u : 0u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS + 1] = 1u;
+    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS + 2] = 1u;
+    if (!waiting) {  // the run's programs that read their group counts from these find none
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = 0u;
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS] = 0u;
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS] = 0u;
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SAMPLE_ARGS] = 0u;
+        penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_TEST_ARGS] = 0u;
+    }
+#endif
     const uint entries = min(penumbraSbsDeferral[PENUMBRA_SBS_ARGS_COUNTER], uint(PENUMBRA_SBS_ARGS_CAPACITY));
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_DISPATCHED] = entries;
     penumbraSbsDeferral[PENUMBRA_SBS_ARGS_WORDS] = (entries + uint(PENUMBRA_SBS_ARGS_GROUP) - 1u) / uint(PENUMBRA_SBS_ARGS_GROUP);

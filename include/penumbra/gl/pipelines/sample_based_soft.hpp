@@ -364,8 +364,9 @@ public:
                            " exact-test words (", test_bytes, " bytes) and ", fragments, " fragments (", fragment_bytes,
                            " bytes) must each fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE = ", max_block);
             // The group counts of each compute pass (PENUMBRA_SBS_ARGS_KIND: 0 pairs, 1 exact tests, 2 tables).
-            const auto args_program = [&](uint32_t kind, uint32_t capacity) {
+            const auto args_program = [&](uint32_t kind, uint32_t capacity, bool round = false) {
                 ShaderDefines d = defines;
+                if (round) d.push_back({"PENUMBRA_SBS_ARGS_ROUND", "1"});
                 if (kind == 5) d.insert(d.end(), region_defines.begin(), region_defines.end());
                 d.push_back({"PENUMBRA_SBS_ARGS_TILE_TEXELS", std::to_string(tile_rows_ * tile_columns_) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
@@ -378,7 +379,7 @@ public:
             table_args_ = args_program(2, options_.deferred_pairs);
             light_compute_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass.comp.glsl", defines, library);
             if (coverage) {
-                region_args_ = args_program(3, regions);
+                region_args_ = args_program(3, regions, compute);
                 ShaderDefines d = defines;
                 d.insert(d.end(), region_defines.begin(), region_defines.end());
                 light_coverage_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
@@ -863,7 +864,20 @@ private:
     /// The coverage pass over the records appended since its last run: their tile counts, the
     /// counts' scan into first items, the items' group counts, then the items (all sized on the
     /// GPU by the records appended).
-    void coverageItems() {
+    /// One workgroup, or (`rounds`) the groups the region args program wrote for this run of the
+    /// deferred passes: none when nothing waits for it (the GL_DISPATCH_INDIRECT_BUFFER is bound).
+    static void roundDispatch(bool rounds) {
+        if (rounds) {
+            glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_ROUND_ARGS * 4));
+        } else {
+            glDispatchCompute(1, 1, 1);
+        }
+    }
+
+    /// `rounds` (the compute light pass): the region args program also decides whether anything
+    /// waits for this run (PENUMBRA_SBS_DEFERRAL_ROUND_ARGS); the run's other one-group programs
+    /// are dispatched with those counts (roundDispatch()).
+    void coverageItems(bool rounds = false) {
         glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
         region_args_.use();
         glDispatchCompute(1, 1, 1);
@@ -873,10 +887,10 @@ private:
         glDispatchComputeIndirect(static_cast<GLintptr>(PENUMBRA_SBS_DEFERRAL_REGION_ARGS * 4));
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         coverage_scan_.use();
-        glDispatchCompute(1, 1, 1);
+        roundDispatch(rounds);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         item_args_.use();
-        glDispatchCompute(1, 1, 1);
+        roundDispatch(rounds);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
         light_coverage_.use();
         bindParams(0);  // each record's list block and flags come from its triangle slot
@@ -922,10 +936,10 @@ private:
     void workDeferredCompute() {
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());  // the setup bound the header there
-        coverageItems();
-        const auto args = [](const gl::Program& program) {
+        coverageItems(true);
+        const auto args = [&](const gl::Program& program) {
             program.use();
-            glDispatchCompute(1, 1, 1);
+            roundDispatch(true);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
         };
         const auto indirect = [&](const gl::Program& program, uint32_t words) {
