@@ -861,9 +861,6 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
 
-    /// The coverage pass over the records appended since its last run: their tile counts, the
-    /// counts' scan into first items, the items' group counts, then the items (all sized on the
-    /// GPU by the records appended).
     /// One workgroup, or (`rounds`) the groups the region args program wrote for this run of the
     /// deferred passes: none when nothing waits for it (the GL_DISPATCH_INDIRECT_BUFFER is bound).
     static void roundDispatch(bool rounds) {
@@ -874,9 +871,11 @@ private:
         }
     }
 
-    /// `rounds` (the compute light pass): the region args program also decides whether anything
-    /// waits for this run (PENUMBRA_SBS_DEFERRAL_ROUND_ARGS); the run's other one-group programs
-    /// are dispatched with those counts (roundDispatch()).
+    /// The coverage pass over the records appended since its last run: their tile counts, the
+    /// counts' scan into first items, the items' group counts, then the items (all sized on the
+    /// GPU by the records appended). `rounds` (the compute light pass): the region args program
+    /// also decides whether anything waits for this run (PENUMBRA_SBS_DEFERRAL_ROUND_ARGS); the
+    /// run's other one-group programs are dispatched with those counts (roundDispatch()).
     void coverageItems(bool rounds = false) {
         glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, deferral_.id());
         region_args_.use();
