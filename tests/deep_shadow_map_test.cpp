@@ -51,17 +51,7 @@ using Rng = penumbra::test::SplitMix64;
 
 // Under ASan/UBSan (the sanitizer build runs every `cpu` test) the run is ~10x slower: the size
 // sweep leaves out its two largest configurations there.
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+using penumbra::test::kSanitized;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

@@ -6,6 +6,9 @@
 //   errorOf(f):  the message of the penumbra::Error f throws, or a marker when it throws none.
 //   contains():  substring test for error messages.
 //   envCount():  a case count from an environment variable (stress runs set it), else the default.
+//   kSanitized:  true in the ASan/UBSan build (tools/test.sh's second tree), where a run is ~4-10x
+//                slower and what is checked is the host code: sweeps over data may run fewer cases
+//                there (saying so), never fewer code paths; the Release run keeps every case.
 #ifndef PENUMBRA_TESTS_SUPPORT_TEST_SUPPORT_HPP
 #define PENUMBRA_TESTS_SUPPORT_TEST_SUPPORT_HPP
 
@@ -22,6 +25,18 @@
 #include <vector>
 
 namespace penumbra::test {
+
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kSanitized = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+#else
+inline constexpr bool kSanitized = false;
+#endif
 
 inline constexpr uint32_t kDefaultTestSeed = 20261201u;
 
