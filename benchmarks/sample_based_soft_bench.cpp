@@ -56,10 +56,15 @@
 //                                    overflow, max_list_length, pairs_deferred ((triangle,
 //                                    texel) pairs the compute pass worked: deferred_pairs, sized
 //                                    W * H * 128 here, at most 16 776 960), deferral_fallbacks
-//                                    (passes drawn again by the fragment stage after an overflow).
+//                                    (passes drawn again by the fragment stage after an overflow;
+//                                    with the compute pass: runs whose pairs the coverage pass
+//                                    worked itself), chunks (compute pass: runs of the deferred
+//                                    passes that had work), gpu_bytes (memoryBytes(): all the
+//                                    pipeline allocated), ns_per_pair (ms / pairs_deferred).
 //   BM_SoftShadowsNScaling           exact and lut at N = 128 and 1024, all four interleaved:
 //                                    n1024_over_n128 = ms_exact_n1024 / ms (exact at 128; target
 //                                    <= 1.5, the seed's Fig. 13 ~2), n1024_over_n128_lut.
+//   BM_SoftShadowsComputeNScaling    the same with the compute light pass.
 //   BM_SoftShadowsCoverage           exact and lut at N = 256, each with the coverage pass
 //                                    (SampleBasedSoftGpuOptions::coverage_texels, the default) and
 //                                    with every influence region drawn (_drawn, coverage_texels = 0),
@@ -74,6 +79,11 @@
 //                                    scene's (sintorn2008 Fig. 12).
 //   BM_SoftShadowsTriangles/<tess>   exact, N = 128, torusKnot(tess): 2 tess^2 + 2 triangles
 //                                    (sintorn2008 Fig. 11); counter triangles.
+//   BM_SoftShadowsComputeTriangles/<tess>  exact, N = 256, compute light pass, torusKnot(tess) at
+//                                    tess 64 ... 512 (8k ... 524k triangles): how the time per pair
+//                                    (ns_per_pair; per_pair_over_first against tess 64 in the same
+//                                    run, target <= 2), chunks and gpu_bytes grow with triangles.
+//   BM_SoftShadowsComputeRadius/<percent>  the same at tess 64 with the light radius x1, x4, x16.
 //   BM_ShadowMapsAveraged/256        N = 256 depth maps, one per light sample, averaged
 //                                    (soft_baselines.hpp: map_size^2 GL_DEPTH_COMPONENT32F,
 //                                    polygon offset (2, 4), nearest texel); ours (exact, N = 256)
@@ -82,7 +92,8 @@
 //                                    and RMSE are both <= the maps'; the same for our lut mode
 //                                    (ms_ours_lut, err_*_ours_lut, ours_lut_speedup,
 //                                    ours_lut_error_le_maps: the seed's approximation, whose
-//                                    error is far below the maps').
+//                                    error is far below the maps'); and ours (exact) with the
+//                                    compute light pass (ms_ours_compute, ours_compute_speedup).
 //   BM_ShadowMapsAveraged/256/map:<S> the same at other map sizes S (512, 2048, 4096, 8192; smoke:
 //                                    64, 256): the maps' time against their error, which falls
 //                                    slowly with S (their bias and texel aliasing), with ours
@@ -226,6 +237,16 @@ std::vector<uint32_t> mapSizeSweep() {
 std::vector<uint32_t> tessellations() {
     if (penumbra::bench::smokeRun()) return {8u, 16u};
     return {16u, 32u, 64u, 128u};
+}
+/// BM_SoftShadowsComputeTriangles: 8k, 32k, 131k and 524k triangles.
+std::vector<uint32_t> computeTessellations() {
+    if (penumbra::bench::smokeRun()) return {8u, 16u};
+    return {64u, 128u, 256u, 512u};
+}
+/// BM_SoftShadowsComputeRadius: the light radius x1, x4, x16.
+std::vector<uint32_t> computeRadiusPercents() {
+    if (penumbra::bench::smokeRun()) return {100u, 400u};
+    return {100u, 400u, 1600u};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -472,9 +493,10 @@ void setErrors(benchmark::State& state, const Errors& e, const std::string& suff
     state.counters["untested" + suffix] = double(e.untested);
 }
 
-/// Work counters of `mode` from an untimed count_work run.
-void setWork(benchmark::State& state, const View& v, const LightConfig& c, const Lut& l, SoftMode mode) {
-    Ours counting(v, c, l, mode, true);
+/// Work counters of `mode` (with `pass`) from an untimed count_work run; returns its frame.
+penumbra::SampleBasedSoftFrame setWork(benchmark::State& state, const View& v, const LightConfig& c, const Lut& l, SoftMode mode,
+                                       penumbra::SoftLightPass pass = penumbra::SoftLightPass::Raster) {
+    Ours counting(v, c, l, mode, true, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels, pass);
     counting.run();
     PENUMBRA_CHECK(counting.ok, "sample_based_soft_bench: the count_work run failed");
     const penumbra::SampleBasedSoftFrame f = counting.pipeline.readFrame();
@@ -490,6 +512,9 @@ void setWork(benchmark::State& state, const View& v, const LightConfig& c, const
     state.counters["max_list_length"] = double(f.statistics.max_list_length);
     state.counters["pairs_deferred"] = double(f.pairs_deferred);
     state.counters["deferral_fallbacks"] = double(f.deferral_fallbacks);
+    state.counters["chunks"] = double(f.chunks);
+    state.counters["gpu_bytes"] = double(counting.pipeline.memoryBytes());
+    return f;
 }
 
 void setScene(benchmark::State& state, const View& v, uint32_t n) {
@@ -547,25 +572,36 @@ void leaveNoBindings() {
 // ---------------------------------------------------------------------------------------------
 // Entries
 
-/// BM_SoftShadows, BM_SoftShadowsRadius, BM_SoftShadowsTriangles: one pipeline run per iteration.
-void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_percent, uint32_t n, SoftMode mode) {
+/// BM_SoftShadows, BM_SoftShadowsRadius, BM_SoftShadowsTriangles and the compute light pass's
+/// BM_SoftShadowsComputeTriangles, BM_SoftShadowsComputeRadius: one pipeline run per iteration.
+/// ns_per_pair: ms / pairs_deferred; per_pair_over_first: that against the first entry of the
+/// same family (`family`, the smallest size or radius) in this run.
+void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_percent, uint32_t n, SoftMode mode,
+               penumbra::SoftLightPass pass = penumbra::SoftLightPass::Raster, const std::string& family = "") {
     if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
         const View& v = view(tessellation);
         const LightConfig& c = lightConfig(tessellation, radius_percent, n);
         const Lut& l = lut(c.sets, c.tolerance);
-        Ours ours(v, c, l, mode, false);
+        Ours ours(v, c, l, mode, false, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels, pass);
         std::vector<Method> methods;
         methods.push_back({"", [&ours] { ours.run(); }});
-        timeMethods(state, methods);
+        const bool q = timeMethods(state, methods);
         gl::checkErrors("sample_based_soft_bench");
         if (!ours.ok) {
             state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
             return;
         }
         setErrors(state, compareOurs(ours, c.truth));
-        setWork(state, v, c, l, mode);
+        const penumbra::SampleBasedSoftFrame f = setWork(state, v, c, l, mode, pass);
+        const double ns_per_pair = f.pairs_deferred ? 1e6 * methods[0].ms(q) / double(f.pairs_deferred) : 0.0;
+        state.counters["ns_per_pair"] = ns_per_pair;
+        if (!family.empty()) {
+            static std::map<std::string, double> first;
+            const double base = first.emplace(family, ns_per_pair).first->second;
+            state.counters["per_pair_over_first"] = ratio(ns_per_pair, base);
+        }
         setScene(state, v, n);
         state.counters["radius"] = c.light.size.x;
         leaveNoBindings();
@@ -574,8 +610,9 @@ void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_p
     }
 }
 
-/// N = 128 against N = 1024 in one entry (sintorn2008 Fig. 13: the cost "roughly only doubles").
-void BM_SoftShadowsNScaling(benchmark::State& state) {
+/// N = 128 against N = 1024 in one entry (sintorn2008 Fig. 13: the cost "roughly only doubles"),
+/// with the light pass `pass`.
+void BM_SoftShadowsNScaling(benchmark::State& state, penumbra::SoftLightPass pass) {
     if (sizesRejected(state)) return;
     penumbra::bench::glContext();
     try {
@@ -583,10 +620,11 @@ void BM_SoftShadowsNScaling(benchmark::State& state) {
         const View& v = view(tessellation);
         const LightConfig& c128 = lightConfig(tessellation, 100, 128);
         const LightConfig& c1024 = lightConfig(tessellation, 100, 1024);
-        Ours exact128(v, c128, lut(c128.sets, c128.tolerance), SoftMode::Exact, false);
-        Ours exact1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Exact, false);
-        Ours lut128(v, c128, lut(c128.sets, c128.tolerance), SoftMode::Lut, false);
-        Ours lut1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Lut, false);
+        const uint32_t texels = penumbra::SampleBasedSoftGpuOptions{}.coverage_texels;
+        Ours exact128(v, c128, lut(c128.sets, c128.tolerance), SoftMode::Exact, false, texels, pass);
+        Ours exact1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Exact, false, texels, pass);
+        Ours lut128(v, c128, lut(c128.sets, c128.tolerance), SoftMode::Lut, false, texels, pass);
+        Ours lut1024(v, c1024, lut(c1024.sets, c1024.tolerance), SoftMode::Lut, false, texels, pass);
         const std::vector<double> ms = timeOurs(
             state, {{"", &exact128}, {"exact_n1024", &exact1024}, {"lut_n128", &lut128}, {"lut_n1024", &lut1024}},
             {&c128.truth, &c1024.truth, &c128.truth, &c1024.truth});
@@ -666,28 +704,34 @@ void BM_ShadowMapsAveraged(benchmark::State& state, uint32_t map_size) {
         const penumbra::bench::AveragedShadowMaps maps(*v.gpu, v.lifted, v.count, c.worldSamples(), v.lo, v.hi, map_size);
         Ours ours(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false);
         Ours ours_lut(v, c, lut(c.sets, c.tolerance), SoftMode::Lut, false);
+        Ours ours_compute(v, c, lut(c.sets, c.tolerance), SoftMode::Exact, false, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels,
+                          penumbra::SoftLightPass::Compute);
         std::vector<Method> methods;
         methods.push_back({"", [&maps] { maps.run(); }});
         methods.push_back({"ours", [&ours] { ours.run(); }});
         methods.push_back({"ours_lut", [&ours_lut] { ours_lut.run(); }});
+        methods.push_back({"ours_compute", [&ours_compute] { ours_compute.run(); }});
         const bool q = timeMethods(state, methods);
         gl::checkErrors("sample_based_soft_bench");
-        if (!ours.ok || !ours_lut.ok) {
+        if (!ours.ok || !ours_lut.ok || !ours_compute.ok) {
             state.SkipWithError("SampleBasedSoftShadows::run returned an error Status");
             return;
         }
         const Errors e_maps = compareWithOracle(v, c.truth, maps.readMasks(), maps.words(), maps.readVisibility());
         const Errors e_ours = compareOurs(ours, c.truth);
         const Errors e_lut = compareOurs(ours_lut, c.truth);
+        const Errors e_compute = compareOurs(ours_compute, c.truth);
         setErrors(state, e_maps);
         setErrors(state, e_ours, "_ours");
         setErrors(state, e_lut, "_ours_lut");
+        setErrors(state, e_compute, "_ours_compute");
         state.counters["ours_speedup"] = ratio(methods[0].ms(q), methods[1].ms(q));
         state.counters["ours_error_le_maps"] =
             (e_ours.mismatchRate() <= e_maps.mismatchRate() && e_ours.rmse <= e_maps.rmse) ? 1.0 : 0.0;
         state.counters["ours_lut_speedup"] = ratio(methods[0].ms(q), methods[2].ms(q));
         state.counters["ours_lut_error_le_maps"] =
             (e_lut.mismatchRate() <= e_maps.mismatchRate() && e_lut.rmse <= e_maps.rmse) ? 1.0 : 0.0;
+        state.counters["ours_compute_speedup"] = ratio(methods[0].ms(q), methods[3].ms(q));
         state.counters["map_size"] = double(maps.mapSize());
         state.counters["maps_per_batch"] = double(maps.batchLayers());
         setScene(state, v, kBaselineSamples);
@@ -791,7 +835,10 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
                                                    [=](benchmark::State& s) { softEntry(s, tessellation, 100, n, mode); }));
         }
     }
-    configure(benchmark::RegisterBenchmark("BM_SoftShadowsNScaling", BM_SoftShadowsNScaling));
+    configure(benchmark::RegisterBenchmark(
+        "BM_SoftShadowsNScaling", [](benchmark::State& s) { BM_SoftShadowsNScaling(s, penumbra::SoftLightPass::Raster); }));
+    configure(benchmark::RegisterBenchmark(
+        "BM_SoftShadowsComputeNScaling", [](benchmark::State& s) { BM_SoftShadowsNScaling(s, penumbra::SoftLightPass::Compute); }));
     configure(benchmark::RegisterBenchmark("BM_SoftShadowsCoverage", BM_SoftShadowsCoverage));
     configure(benchmark::RegisterBenchmark("BM_SoftShadowsCompute", BM_SoftShadowsCompute));
     for (const uint32_t percent : radiusPercents()) {
@@ -813,6 +860,18 @@ benchmark::internal::Benchmark* configure(benchmark::internal::Benchmark* b) {
         const std::string name = "BM_SoftShadowsTriangles/" + std::to_string(t);
         configure(benchmark::RegisterBenchmark(name.c_str(),
                                                [=](benchmark::State& s) { softEntry(s, t, 100, 128, SoftMode::Exact); }));
+    }
+    for (const uint32_t t : computeTessellations()) {
+        const std::string name = "BM_SoftShadowsComputeTriangles/" + std::to_string(t);
+        configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) {
+            softEntry(s, t, 100, kBaselineSamples, SoftMode::Exact, penumbra::SoftLightPass::Compute, "triangles");
+        }));
+    }
+    for (const uint32_t percent : computeRadiusPercents()) {
+        const std::string name = "BM_SoftShadowsComputeRadius/" + std::to_string(percent);
+        configure(benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& s) {
+            softEntry(s, tessellation, percent, kBaselineSamples, SoftMode::Exact, penumbra::SoftLightPass::Compute, "radius");
+        }));
     }
     return true;
 }();

@@ -19,13 +19,15 @@
 // the deferred passes): when nothing waits for them (no record, slot, pair, fragment or setup count
 // since their last run, as after setup runs of list blocks no list reaches) it zeroes every pass's
 // group counts and the round's (PENUMBRA_SBS_DEFERRAL_ROUND_ARGS), with which the host dispatches
-// the run's other one-invocation programs and the scan: an idle run costs one invocation.
+// the run's other one-invocation programs and the scan: an idle run costs one invocation; a run
+// with work adds one to PENUMBRA_SBS_WORK_CHUNKS (with or without PENUMBRA_SBS_COUNT_WORK).
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY=256u
 // penumbra-permutation: PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=1 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=2 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1 PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=4 PENUMBRA_SBS_ARGS_TILE_TEXELS=256u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=5 PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_TILE_BASE=0u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
@@ -37,7 +39,10 @@
 layout(local_size_x = 1) in;
 
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
-#if PENUMBRA_SBS_COUNT_WORK
+#ifndef PENUMBRA_SBS_ARGS_ROUND
+#define PENUMBRA_SBS_ARGS_ROUND 0
+#endif
+#if PENUMBRA_SBS_COUNT_WORK || PENUMBRA_SBS_ARGS_ROUND
 layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uint penumbraSbsWork[]; };
 #endif
 
@@ -69,9 +74,6 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 #endif
 #ifndef PENUMBRA_SBS_ARGS_GROUP
 #define PENUMBRA_SBS_ARGS_GROUP PENUMBRA_SBS_DEFERRAL_GROUP
-#endif
-#ifndef PENUMBRA_SBS_ARGS_ROUND
-#define PENUMBRA_SBS_ARGS_ROUND 0
 #endif
 
 #if PENUMBRA_SBS_ARGS_KIND == 5
@@ -105,6 +107,7 @@ void main() {
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS] = waiting ? 1u : 0u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS + 1] = 1u;
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ROUND_ARGS + 2] = 1u;
+    if (waiting) penumbraSbsWork[PENUMBRA_SBS_WORK_CHUNKS] += 1u;
     if (!waiting) {  // the run's programs that read their group counts from these find none
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ARGS] = 0u;
         penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FRAGMENT_ARGS] = 0u;

@@ -135,7 +135,9 @@
 #define PENUMBRA_SBS_WORK_PAIRS_WEDGED 16      // pairs whose view sample lies beyond one of T's wedge planes
 #define PENUMBRA_SBS_WORK_BAD_INDICES 17       // compute light pass: caster triangles naming a vertex past
                                                // their positions (cast nothing; counted once per frame)
-#define PENUMBRA_SBS_WORK_WORDS 18
+#define PENUMBRA_SBS_WORK_CHUNKS 18            // compute light pass: runs of the deferred passes that had work
+                                               // (the chunks a frame's pairs took; counted always)
+#define PENUMBRA_SBS_WORK_WORDS 19
 
 // The deferral buffer's words (PENUMBRA_SBS_DEFERRAL_BINDING).
 #define PENUMBRA_SBS_DEFERRAL_PAIRS 0        // pairs appended since the last dispatch (may exceed the capacity)

@@ -197,6 +197,10 @@ struct SampleBasedSoftFrame {
     /// SoftLightPass::Compute: caster triangles naming a vertex past their CasterBuffer's positions
     /// (they cast nothing: the masks miss their shadows; count_work).
     uint64_t caster_indices_out_of_range = 0;
+    /// SoftLightPass::Compute: runs of the deferred passes that had work, i.e. the chunks the frame's
+    /// triangles and pairs were split into to fit the slots and buffers reserved (decided on the
+    /// GPU; counted with or without count_work). 0 with the raster light pass.
+    uint64_t chunks = 0;
     /// GPU nanoseconds per stage (options.timings; 0 otherwise): lists (count, scan, scatter,
     /// statistics), light pass (predicate + every list block), resolve.
     uint64_t lists_ns = 0, light_pass_ns = 0, resolve_ns = 0;
@@ -628,6 +632,7 @@ public:
         f.pairs_deferred = w[PENUMBRA_SBS_WORK_DEFERRED];
         f.deferral_fallbacks = w[PENUMBRA_SBS_WORK_FALLBACKS];
         f.caster_indices_out_of_range = w[PENUMBRA_SBS_WORK_BAD_INDICES];
+        f.chunks = w[PENUMBRA_SBS_WORK_CHUNKS];
         if (!timers_.empty()) {
             f.lists_ns = timers_[0].nanoseconds();
             f.light_pass_ns = timers_[1].nanoseconds();
@@ -656,6 +661,18 @@ public:
     GLuint lightPassProgram() const { return light_pass_.id(); }
     GLuint fallbackLightPassProgram() const { return light_fragment_.id(); }
     uint32_t reservedSamples() const { return reserved_; }
+    /// GPU memory this pipeline allocated, in bytes: its buffers, the list storage and the raster
+    /// pass's stencil (skips.empty_blocks, a byte per texel). Fixed by the constructor and
+    /// reserve(): a frame allocates nothing, whatever its triangles and pairs.
+    uint64_t memoryBytes() const {
+        uint64_t bytes = stencil_.id() ? uint64_t(options_.grid_width) * options_.grid_height : 0;
+        for (const gl::Buffer* b : {&deferral_, &pairs_, &triangles_, &tests_, &table_pairs_, &fragments_, &marks_, &near_, &params_,
+                                    &influence_params_, &samples_, &work_, &dummy_, &masks_, &visibility_, &lists_.counts,
+                                    &lists_.offsets, &lists_.positions, &lists_.ids, &lists_.slots, &lists_.texels, &lists_.header,
+                                    &lists_.frustum})
+            bytes += b->size();
+        return bytes;
+    }
     /// The light grid's view-projection (the influence setup's, which the lists use too).
     const glm::mat4& viewProjection() const { return vp_; }
 
