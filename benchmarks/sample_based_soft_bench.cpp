@@ -60,7 +60,7 @@
 //                                    with the compute pass: runs whose pairs the coverage pass
 //                                    worked itself), chunks (compute pass: runs of the deferred
 //                                    passes that had work), gpu_bytes (memoryBytes(): all the
-//                                    pipeline allocated), ns_per_pair (ms / pairs_deferred).
+//                                    pipeline allocated), ns_per_pair (ms / pairs).
 //   BM_SoftShadowsNScaling           exact and lut at N = 128 and 1024, all four interleaved:
 //                                    n1024_over_n128 = ms_exact_n1024 / ms (exact at 128; target
 //                                    <= 1.5, the seed's Fig. 13 ~2), n1024_over_n128_lut.
@@ -574,8 +574,9 @@ void leaveNoBindings() {
 
 /// BM_SoftShadows, BM_SoftShadowsRadius, BM_SoftShadowsTriangles and the compute light pass's
 /// BM_SoftShadowsComputeTriangles, BM_SoftShadowsComputeRadius: one pipeline run per iteration.
-/// ns_per_pair: ms / pairs_deferred; per_pair_over_first: that against the first entry of the
-/// same family (`family`, the smallest size or radius) in this run.
+/// ns_per_pair: ms / pairs (pairs, not pairs_deferred, which an overflow leaves at 0);
+/// per_pair_over_first: that against the first entry of the same family (`family`, the smallest
+/// size or radius) in this run.
 void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_percent, uint32_t n, SoftMode mode,
                penumbra::SoftLightPass pass = penumbra::SoftLightPass::Raster, const std::string& family = "") {
     if (sizesRejected(state)) return;
@@ -595,7 +596,7 @@ void softEntry(benchmark::State& state, uint32_t tessellation, uint32_t radius_p
         }
         setErrors(state, compareOurs(ours, c.truth));
         const penumbra::SampleBasedSoftFrame f = setWork(state, v, c, l, mode, pass);
-        const double ns_per_pair = f.pairs_deferred ? 1e6 * methods[0].ms(q) / double(f.pairs_deferred) : 0.0;
+        const double ns_per_pair = f.pairs ? 1e6 * methods[0].ms(q) / double(f.pairs) : 0.0;
         state.counters["ns_per_pair"] = ns_per_pair;
         if (!family.empty()) {
             static std::map<std::string, double> first;
