@@ -1443,8 +1443,9 @@ namespace {
 void checkComputeAgainstRaster(const std::vector<std::string>& names, bool full) {
     penumbra::test::context();
     struct Capacity {
-        uint32_t pairs, triangles, fragments;
+        uint32_t pairs, triangles, fragments, windows;
     };
+    constexpr uint32_t kTwelfth = 0xFFFFFFFFu;  // fragments: a twelfth of the default run's visits
     for (const std::string& name : names) {
         const bool first = name == names.front();
         const bool obj = name.size() > 4 && name.compare(name.size() - 4, 4, ".obj") == 0;
@@ -1481,11 +1482,18 @@ void checkComputeAgainstRaster(const std::vector<std::string>& names, bool full)
                 CHECK(std::count_if(raster_masks.begin(), raster_masks.end(), [](uint32_t m) { return m != 0u; }) > 0);
                 CHECK(raster.chunks == 0);
                 options.light_pass = penumbra::SoftLightPass::Compute;
-                uint64_t default_chunks = 0;  // with the default capacities (the first run below)
-                for (const Capacity capacity : {Capacity{0, 0, 0}, Capacity{0, 64, 0}, Capacity{64, 0, 1u << 20}, Capacity{64, 0, 16}}) {
+                uint64_t default_chunks = 0, default_fragments = 0;  // with the default capacities (the first run below)
+                // Overflows (64 pairs): into 2^20 fragments (none); into a twelfth of the frame's
+                // fragments (split into windows on the GPU, none worked inline); into 16 fragments
+                // (every window overflows too: inline), without windows (the whole run inline);
+                // with 64 slots too (runs of later list blocks, which no windows follow, inline).
+                for (const Capacity capacity : {Capacity{0, 0, 0, 8}, Capacity{0, 64, 0, 8}, Capacity{64, 0, 1u << 20, 8},
+                                                Capacity{64, 0, kTwelfth, 64}, Capacity{64, 0, 16, 8}, Capacity{64, 0, 16, 0},
+                                                Capacity{64, 64, 16, 2}}) {
                     if (!depth && capacity.pairs + capacity.triangles != 0) continue;
                     const bool all = capacity.pairs + capacity.triangles + capacity.fragments == 0;
-                    if (!full && !all && !(first && mode == penumbra::SoftMode::Exact) && !(brute && capacity.fragments == 16))
+                    if (!full && !all && !(first && mode == penumbra::SoftMode::Exact) &&
+                        !(brute && capacity.fragments == 16 && capacity.windows != 0))
                         continue;
                     CAPTURE(name);
                     CAPTURE(mode_name);
@@ -1493,16 +1501,20 @@ void checkComputeAgainstRaster(const std::vector<std::string>& names, bool full)
                     CAPTURE(capacity.pairs);
                     CAPTURE(capacity.triangles);
                     CAPTURE(capacity.fragments);
+                    CAPTURE(capacity.windows);
                     penumbra::SampleBasedSoftGpuOptions o = options;
                     if (capacity.pairs) o.deferred_pairs = capacity.pairs;
                     o.deferred_triangles = capacity.triangles;
-                    o.deferred_fragments = capacity.fragments;
+                    o.deferred_fragments = capacity.fragments == kTwelfth ? uint32_t(std::max<uint64_t>(16, default_fragments / 12))
+                                                                        : capacity.fragments;
+                    o.overflow_windows = capacity.windows;
                     penumbra::SampleBasedSoftFrame computed;
                     const std::vector<uint32_t> masks = runComputeFrame(o, w, soft, casters, depth, table, &computed);
                     uint64_t moved = 0;
                     for (size_t i = 0; i < raster_masks.size(); ++i) moved += uint64_t(__builtin_popcount(raster_masks[i] ^ masks[i]));
                     MESSAGE(name, " ", mode_name, std::string(depth ? " depth" : " g-buffer"), ", pairs ", o.deferred_pairs, " / slots ",
-                            capacity.triangles, " / fragments ", capacity.fragments, ": fragments ", computed.fragments, " (raster ",
+                            capacity.triangles, " / fragments ", o.deferred_fragments, " / windows ", o.overflow_windows,
+                            ": fragments ", computed.fragments, " (raster ",
                             raster.fragments, "), pairs ", computed.pairs, " (", raster.pairs, "), fallbacks ",
                             computed.deferral_fallbacks, ", chunks ", computed.chunks, ", bits moved ", moved);
                     if (mode != penumbra::SoftMode::Lut) CHECK(masks == raster_masks);
@@ -1517,9 +1529,12 @@ void checkComputeAgainstRaster(const std::vector<std::string>& names, bool full)
                     CHECK(computed.fragments >= shaded);
                     CHECK(computed.fragments <= shaded + shaded / 20);
                     CHECK((computed.deferral_fallbacks != 0) == (capacity.fragments == 16));
-                    // Chunks: at least one run had work; few slots split the frame into more.
+                    // Chunks: at least one run had work; few slots, or windows, split the frame
+                    // into more.
                     CHECK(computed.chunks >= 1);
                     if (all) default_chunks = computed.chunks;
+                    if (all) default_fragments = computed.fragments;
+                    if (capacity.fragments == kTwelfth) CHECK(computed.chunks > default_chunks);
                     if (all && first && mode == penumbra::SoftMode::Exact && depth) {  // counted without count_work too
                         penumbra::SampleBasedSoftGpuOptions quiet = o;
                         quiet.count_work = false;

@@ -950,6 +950,16 @@ struct SampleBasedSoftGpuOptions {
     /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
     /// deferred_pairs / 4 (4 MiB by default).
     uint32_t deferred_tests = 0;
+    /// SoftLightPass::Compute: windows, in [0, 64], default 8. A run of the deferred passes whose
+    /// pairs overflow the pairs and fragments buffers is split on the GPU into as many windows as
+    /// the fragments asked for fill the fragments buffer, plus one, at most this many: its records
+    /// r with r % windows == k worked in window k, at the pairs' speed. Only a window that
+    /// overflows too is worked by the coverage pass's inline program (SampleBasedSoftFrame::
+    /// deferral_fallbacks, ~10x slower per pair), as is an overflow in a run of list blocks past
+    /// the first only (no windows follow those). Windows follow each pass's last run and each run
+    /// holding list block 0; each is one sequence of the deferred passes' 14 dispatches, empty (no
+    /// groups) unless its run split (llvmpipe: ~4% of the bench frame's time at 8).
+    uint32_t overflow_windows = 8;
     /// Deferred pairs: influence regions whose bounding box spans at most this many texels are
     /// not drawn; the geometry stage hands them, as records (the triangle's slot and its polygon),
     /// to a coverage pass (light_pass_coverage.comp.glsl) that visits their texels in a loop and
@@ -995,6 +1005,8 @@ inline void validateSampleBasedSoftGpuOptions(const SampleBasedSoftGpuOptions& o
                    o.deferred_fragments, " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
     PENUMBRA_CHECK(o.deferred_tests <= 65535u * 256u, "penumbra::SampleBasedSoftShadows: deferred_tests = ", o.deferred_tests,
                    " must be at most 16776960 (one dispatch of 65 535 groups of 256)");
+    PENUMBRA_CHECK(o.overflow_windows <= 64u, "penumbra::SampleBasedSoftShadows: overflow_windows = ", o.overflow_windows,
+                   " must be at most 64");
     PENUMBRA_CHECK(o.coverage_texels <= (1u << 20), "penumbra::SampleBasedSoftShadows: coverage_texels = ", o.coverage_texels,
                    " must be at most 1048576");
     PENUMBRA_CHECK(o.light_pass == SoftLightPass::Raster || o.light_pass == SoftLightPass::Compute,

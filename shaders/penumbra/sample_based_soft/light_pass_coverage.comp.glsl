@@ -20,13 +20,15 @@
 //     counts into each record's first item (an exclusive scan: its cost follows the records);
 //   the default: one invocation per (record, tile) item (the record found by binary search over
 //     the first items) visits the tile's texels of the polygon;
-//   PENUMBRA_SBS_COVERAGE_INLINE=1 (SoftLightPass::Compute): one invocation per (item, texel of its
-//     tile) works the texel's block itself, as the per-fragment program does (light_pass.comp.glsl),
-//     counting straight into the work counters; its group counts are 0 unless the deferred pairs
-//     and fragments overflowed (the compute twin of the raster pass's redraw);
+//   PENUMBRA_SBS_COVERAGE_INLINE=1 (SoftLightPass::Compute): one workgroup per item, one invocation
+//     per texel of its tile, works the texel's block itself, as the per-fragment program does
+//     (light_pass.comp.glsl), counting straight into the work counters; its group counts are 0
+//     unless the deferred pairs and fragments overflowed (the compute twin of the raster pass's
+//     redraw);
 //   PENUMBRA_SBS_COVERAGE_BITS=1: the occupancy bits, one invocation per word, after the lists.
 // Dispatched indirectly with the group counts light_pass_args.comp.glsl wrote (kind 3: the
-// records, for the count program; kinds 5 and 4: the items, folded into x and y), but the scan
+// records, for the count program; kind 5: the items' groups, kind 4: one group per item, folded
+// into x and y), but the scan
 // (one workgroup) and bits programs (direct).
 // Defines: light_pass_work.glsl's, PENUMBRA_INFLUENCE_SIDES, PENUMBRA_SBS_REGION_BASE (the records'
 // first word in the triangles buffer) and _CAPACITY, PENUMBRA_SBS_OCCUPANCY_BASE / _ROW (the
@@ -40,7 +42,7 @@
 // penumbra-permutation: PENUMBRA_SBS_CLOSED_CASTERS=1 PENUMBRA_SBS_WEDGES=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=12 PENUMBRA_SBS_TILE_ROWS=2u PENUMBRA_SBS_TILE_COLUMNS=8u
 // penumbra-permutation: PENUMBRA_SBS_COVERAGE_BITS=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_SBS_COVERAGE_SCAN=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
-// penumbra-permutation: PENUMBRA_SBS_COVERAGE_COUNT=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
+// penumbra-permutation: PENUMBRA_SBS_COVERAGE_COUNT=1 PENUMBRA_SBS_COVERAGE_WINDOWS=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_SBS_COVERAGE_INLINE=1 PENUMBRA_SBS_WEDGES=1 PENUMBRA_SBS_CLOSED_CASTERS=1 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
 // penumbra-permutation: PENUMBRA_SBS_COVERAGE_INLINE=1 PENUMBRA_SBS_MODE=2 PENUMBRA_SBS_COUNT_WORK=0 PENUMBRA_SBS_REGION_BASE=0u PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_OCCUPANCY_BASE=0u PENUMBRA_SBS_OCCUPANCY_ROW=8u PENUMBRA_SBS_TILE_BASE=0u PENUMBRA_INFLUENCE_SIDES=6
 #ifndef PENUMBRA_SBS_COVERAGE_INLINE
@@ -92,6 +94,8 @@
 
 #if PENUMBRA_SBS_COVERAGE_SCAN
 layout(local_size_x = PENUMBRA_SBS_COVERAGE_SCAN_GROUP) in;
+#elif PENUMBRA_SBS_COVERAGE_INLINE
+layout(local_size_x = PENUMBRA_SBS_TILE_ROWS * PENUMBRA_SBS_TILE_COLUMNS) in;  // one invocation per texel of a tile
 #else
 layout(local_size_x = PENUMBRA_SBS_COVERAGE_GROUP) in;
 #endif
@@ -154,12 +158,23 @@ void main() {
 #elif PENUMBRA_SBS_COVERAGE_COUNT
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) readonly buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 
+#ifndef PENUMBRA_SBS_COVERAGE_WINDOWS
+#define PENUMBRA_SBS_COVERAGE_WINDOWS 0  // 1: the compute light pass's windows (light_pass_args.comp.glsl)
+#endif
+#if PENUMBRA_SBS_COVERAGE_WINDOWS
+layout(location = 0) uniform uint penumbraSbsWindow;  // 0 or ~0u: a run; k + 1: window k of the last run
+#endif
+
 // Record r's tile box (first tile column | first tile row << 16, tile columns | tile rows << 16)
-// and tile count (0 for a polygon that reaches no texel centre).
+// and tile count (0 for a polygon that reaches no texel centre, or a record outside the window).
 void main() {
     const uint r = gl_GlobalInvocationID.x;
     uint tiles = 0u, first = 0u, size = 0u;
     if (r >= penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED]) return;
+#if PENUMBRA_SBS_COVERAGE_WINDOWS
+    const uint split = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_SPLIT];
+    if (penumbraSbsWindow == 0u || penumbraSbsWindow == 0xFFFFFFFFu || r % max(split, 1u) == penumbraSbsWindow - 1u)
+#endif
     {
         uint slot;
         vec2 lo, hi;
@@ -265,9 +280,78 @@ bool penumbraSbsItem(uint i, out uint r, out uvec2 tile) {
     return true;
 }
 
+#if PENUMBRA_SBS_COVERAGE_INLINE
+// The inline program: one workgroup per (record, tile) item, one invocation per texel of the
+// tile. The item's lookup (a binary search) and its rows' spans are computed once per workgroup,
+// by the first invocation and one invocation per row, and shared: a texel whose list block is
+// empty costs a few reads. Each texel the coverage rule visits whose block is not empty is worked
+// whole (the per-fragment program's work, light_pass.comp.glsl), counted at once.
+shared uint penumbraSbsItemRecord, penumbraSbsItemTile, penumbraSbsItemLive;
+shared ivec2 penumbraSbsRowSpan[PENUMBRA_SBS_TILE_ROWS];
+
 void main() {
-    // Items folded into x and y (light_pass_args.comp.glsl, kind 5); the inline program's z: the
-    // texel of the tile.
+    // Items folded into x and y (light_pass_args.comp.glsl, kind 4).
+    const uint i = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uint t = gl_LocalInvocationID.x;
+    if (t == 0u) {
+        uint r;
+        uvec2 tile;
+        bool live = penumbraSbsItem(i, r, tile);
+        if (live) {
+            // A tile whose lists all end before this item's list block has nothing to visit.
+            const uint record_slot = penumbraSbsTriangles[uint(PENUMBRA_SBS_REGION_BASE) + PENUMBRA_SBS_REGION_WORDS(PENUMBRA_INFLUENCE_SIDES) * r];
+            const uint block = penumbraSbsTriangles[PENUMBRA_SBS_TRIANGLE_WORDS * record_slot + 9u] & 0xFFFFu;
+            const uint longest = penumbraSbsTriangles[PENUMBRA_SBS_TILE_LONGEST + tile.y * PENUMBRA_SBS_TILES_PER_ROW + tile.x];
+            live = !(block < uint(PENUMBRA_SBS_STENCIL_BLOCKS) && longest <= block * penumbraSbsParams.grid.z);
+        }
+        penumbraSbsItemRecord = r;
+        penumbraSbsItemTile = tile.x | tile.y << 16u;
+        penumbraSbsItemLive = live ? 1u : 0u;
+    }
+    barrier();
+    if (penumbraSbsItemLive == 0u) return;  // the whole workgroup (uniform)
+    const uint r = penumbraSbsItemRecord;
+    const uvec2 tile = uvec2(penumbraSbsItemTile & 0xFFFFu, penumbraSbsItemTile >> 16u);
+    const ivec2 tile_origin = ivec2(tile * uvec2(PENUMBRA_SBS_TILE_COLUMNS, PENUMBRA_SBS_TILE_ROWS));
+    if (t < PENUMBRA_SBS_TILE_ROWS) {
+        // Row t of the tile: the texels the coverage rule visits (none outside the polygon's rows,
+        // the grid, or where no texel of the tile's row is listed).
+        uint slot;
+        vec2 lo, hi;
+        const int n = penumbraSbsLoadRecord(r, slot, lo, hi);
+        const int y = tile_origin.y + int(t);
+        const ivec2 rows = penumbraSbsCoverageRange(double(lo.y), double(hi.y), int(penumbraSbsParams.grid.y));
+        const uint tile_word = uint(tile_origin.x) >> 5u, tile_shift = uint(tile_origin.x) & 31u;
+        const uint tile_bits = (PENUMBRA_SBS_TILE_COLUMNS >= 32u ? 0xFFFFFFFFu : (1u << PENUMBRA_SBS_TILE_COLUMNS) - 1u) << tile_shift;
+        ivec2 span = ivec2(0, -1);
+        if (y >= rows.x && y <= rows.y &&
+            (penumbraSbsTriangles[uint(PENUMBRA_SBS_OCCUPANCY_BASE) + uint(y) * PENUMBRA_SBS_OCCUPANCY_ROW + tile_word] & tile_bits) != 0u)
+            span = penumbraSbsCoverageSpan(n, y, int(penumbraSbsParams.grid.x));
+        penumbraSbsRowSpan[t] = span;
+    }
+    barrier();
+    const ivec2 texel = tile_origin + ivec2(int(t % PENUMBRA_SBS_TILE_COLUMNS), int(t / PENUMBRA_SBS_TILE_COLUMNS));
+    const ivec2 span = penumbraSbsRowSpan[t / PENUMBRA_SBS_TILE_COLUMNS];
+    if (texel.x < span.x || texel.x > span.y) return;  // outside the polygon, the grid or every listed row
+    if ((penumbraSbsTriangles[uint(PENUMBRA_SBS_OCCUPANCY_BASE) + uint(texel.y) * PENUMBRA_SBS_OCCUPANCY_ROW + (uint(texel.x) >> 5u)] &
+         (1u << (uint(texel.x) & 31u))) == 0u)
+        return;  // an empty list
+    const uint slot = penumbraSbsTriangles[uint(PENUMBRA_SBS_REGION_BASE) + PENUMBRA_SBS_REGION_WORDS(PENUMBRA_INFLUENCE_SIDES) * r];
+    const PenumbraSbsParams P = penumbraSbsSlotParams(slot);
+    if (penumbraSampleListsBlock(texel, P.grid.w, P.grid.z).y == 0u) return;  // past the list's end
+#if PENUMBRA_SBS_CLOSED_CASTERS
+    // The second pass over closed casters: texels without a flagged sample have nothing to do
+    // (uncounted, as the compute light pass counts no texel its occupancy bits skip).
+    if ((P.reserved.y & PENUMBRA_SBS_FLAG_CULLED_PASS) != 0u &&
+        penumbraSbsNear[P.counts.x + uint(texel.y) * P.grid.x + uint(texel.x)] == 0u)
+        return;
+#endif
+    penumbraSbsFragmentPairs = 1u;  // the visit counts as a fragment
+    penumbraSbsSlotWork(slot, uvec2(texel), PENUMBRA_SBS_WHOLE_BLOCK);
+}
+#else
+void main() {
+    // Items folded into x and y (light_pass_args.comp.glsl, kind 5).
     const uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * uint(PENUMBRA_SBS_COVERAGE_GROUP) +
                    gl_LocalInvocationID.x;
     uint r;
@@ -286,7 +370,7 @@ void main() {
     vec2 lo, hi;
     const int n = penumbraSbsLoadRecord(r, slot, lo, hi);
     const PenumbraSbsParams P = penumbraSbsSlotParams(slot);
-#if PENUMBRA_SBS_WEDGES && !PENUMBRA_SBS_COVERAGE_INLINE
+#if PENUMBRA_SBS_WEDGES
     const PenumbraSbsWedges wedges = penumbraSbsSlotWedges(slot);
 #else
     const PenumbraSbsWedges wedges = penumbraSbsNoWedges();
@@ -301,12 +385,7 @@ void main() {
     const ivec2 rows = penumbraSbsCoverageRange(double(lo.y), double(hi.y), int(P.grid.y));
     const ivec2 tile_rows = ivec2(tile.y * PENUMBRA_SBS_TILE_ROWS) + ivec2(0, int(PENUMBRA_SBS_TILE_ROWS) - 1);
     const ivec2 tile_columns = ivec2(tile.x * PENUMBRA_SBS_TILE_COLUMNS) + ivec2(0, int(PENUMBRA_SBS_TILE_COLUMNS) - 1);
-#if PENUMBRA_SBS_COVERAGE_INLINE
-    const uint texel_index = gl_WorkGroupID.z;
-    const int y_first = tile_rows.x + int(texel_index / PENUMBRA_SBS_TILE_COLUMNS), y_last = y_first;
-#else
     const int y_first = max(rows.x, tile_rows.x), y_last = min(rows.y, tile_rows.y);
-#endif
     const uint tile_word = uint(tile_columns.x) >> 5u, tile_shift = uint(tile_columns.x) & 31u;
     const uint tile_bits = (PENUMBRA_SBS_TILE_COLUMNS >= 32u ? 0xFFFFFFFFu : (1u << PENUMBRA_SBS_TILE_COLUMNS) - 1u) << tile_shift;
     for (int y = y_first; y <= y_last; ++y) {
@@ -318,12 +397,7 @@ void main() {
                         tile_bits) == 0u)
             continue;
         const ivec2 span = penumbraSbsCoverageSpan(n, y, int(P.grid.x));
-#if PENUMBRA_SBS_COVERAGE_INLINE
-        const int x = tile_columns.x + int(texel_index % PENUMBRA_SBS_TILE_COLUMNS);
-        const int x0 = max(span.x, x), x1 = min(span.y, x);
-#else
         const int x0 = max(span.x, tile_columns.x), x1 = min(span.y, tile_columns.y);
-#endif
         if (x0 > x1) continue;
         // Only the texels whose list is not empty (the occupancy bits), lowest first: one word
         // (the tile's columns lie in one).
@@ -352,12 +426,7 @@ void main() {
                 continue;
             }
 #endif
-#if PENUMBRA_SBS_COVERAGE_INLINE
-            penumbraSbsFragmentPairs = 1u;  // the visit counts as a fragment
-            penumbraSbsSlotWork(slot, texel, PENUMBRA_SBS_WHOLE_BLOCK);
-#else
             penumbraSbsAppendBlock(texel, range, slot, wedges);
-#endif
         }
 #if PENUMBRA_SBS_COUNT_WORK
         // Without the stencil the fragment stage counts the empty blocks' fragments too: skipped
@@ -371,4 +440,5 @@ void main() {
 #endif
     }
 }
+#endif
 #endif

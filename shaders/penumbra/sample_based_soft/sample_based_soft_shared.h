@@ -169,7 +169,9 @@
                                              // y: the list blocks of this dispatch that some list reaches)
 #define PENUMBRA_SBS_DEFERRAL_ROUND_ARGS 61  // 3 words: compute light pass, (1, 1, 1) when the deferred passes have
                                              // work since their last run, else (0, 1, 1): their one-invocation programs' group counts
-#define PENUMBRA_SBS_DEFERRAL_WORDS 64
+#define PENUMBRA_SBS_DEFERRAL_SPLIT 64      // compute light pass: the windows the last overflowed run is split into
+                                             // (0: none; run k of them works the records r with r % SPLIT == k)
+#define PENUMBRA_SBS_DEFERRAL_WORDS 68
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_COVERAGE_GROUP 64      // light_pass_coverage.comp.glsl's workgroup size
 #define PENUMBRA_SBS_SETUP_GROUP 64         // light_pass_setup.comp.glsl's workgroup size

@@ -371,8 +371,9 @@ public:
             const auto args_program = [&](uint32_t kind, uint32_t capacity, bool round = false) {
                 ShaderDefines d = defines;
                 if (round) d.push_back({"PENUMBRA_SBS_ARGS_ROUND", "1"});
+                if (compute && (kind == 0 || round) && options_.overflow_windows > 0)
+                    d.push_back({"PENUMBRA_SBS_ARGS_WINDOWS", std::to_string(options_.overflow_windows)});
                 if (kind == 5) d.insert(d.end(), region_defines.begin(), region_defines.end());
-                d.push_back({"PENUMBRA_SBS_ARGS_TILE_TEXELS", std::to_string(tile_rows_ * tile_columns_) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
                 d.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(capacity) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY", std::to_string(fragments) + "u"});
@@ -391,7 +392,9 @@ public:
                 coverage_bits_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
                 coverage_bit_groups_ = uint32_t(detail::divUp(occupancy_words, PENUMBRA_SBS_COVERAGE_GROUP));
                 d.back() = {"PENUMBRA_SBS_COVERAGE_COUNT", "1"};
+                if (compute && options_.overflow_windows > 0) d.push_back({"PENUMBRA_SBS_COVERAGE_WINDOWS", "1"});
                 coverage_count_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
+                if (compute && options_.overflow_windows > 0) d.pop_back();
                 d.back() = {"PENUMBRA_SBS_COVERAGE_SCAN", "1"};
                 coverage_scan_ = gl::buildComputeProgram("penumbra/sample_based_soft/light_pass_coverage.comp.glsl", d, library);
                 item_args_ = args_program(5, regions);
@@ -949,7 +952,13 @@ private:
     /// last call: the coverage pass appends their regions' pairs, the pairs, fragments, tables and
     /// exact-test passes work them, and when the pairs and fragments overflowed the coverage pass's
     /// inline program works every region itself instead (group counts decided on the GPU).
-    void workDeferredCompute() {
+    /// `window`: 0 a run that windows follow, k + 1 window k of the last run, kNoWindows a run
+    /// none follow (its overflow is worked inline).
+    static constexpr uint32_t kNoWindows = 0xFFFFFFFFu;
+    void workDeferredCompute(uint32_t window) {
+        if (options_.overflow_windows > 0)  // light_pass_args.comp.glsl's penumbraSbsWindow
+            for (const gl::Program* program : {&region_args_, &coverage_count_, &deferral_args_})
+                glProgramUniform1ui(program->id(), 0, window);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());  // the setup bound the header there
         coverageItems(true);
@@ -978,6 +987,12 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
 
+    /// A run of the deferred passes, then its windows (nothing to do unless the run overflowed).
+    void workDeferredRun() {
+        workDeferredCompute(options_.overflow_windows > 0 ? 0u : kNoWindows);
+        for (uint32_t k = 0; k < options_.overflow_windows; ++k) workDeferredCompute(k + 1);
+    }
+
     /// SoftLightPass::Compute's light pass: per list block and class the setup of every range
     /// (blocks no list reaches return on the GPU), the deferred passes whenever the triangles
     /// dispatched since their last run could fill the slots, then SoftSkips::closed_casters'
@@ -990,6 +1005,7 @@ private:
         const uint64_t run_pairs = std::max<uint64_t>(1, std::min<uint64_t>(slots_, (1ull << 31) / grid_tiles_));
         const uint32_t chunk = static_cast<uint32_t>(std::min<uint64_t>(run_pairs, 65535u * PENUMBRA_SBS_SETUP_GROUP));
         uint64_t pending = 0;  // pairs dispatched at most since the deferred passes last ran
+        bool pending_block0 = false;  // ... of which some of list block 0
         const GLuint setup_id = setup_program_.id(), gate_id = setup_gate_.id();
         // One range of class slot `c` (0 closed, 1 open, 2 the closed casters' second pass): per
         // chunk of triangles, runs of list blocks (as many as the slots hold beside the chunk),
@@ -1010,9 +1026,18 @@ private:
                 for (uint32_t b0 = 0; b0 < options_.max_list_blocks; b0 += blocks) {
                     const uint32_t run = std::min(blocks, options_.max_list_blocks - b0);
                     if (pending + uint64_t(n) * run > run_pairs) {
-                        workDeferredCompute();
+                        // Windows after the runs that hold list block 0 (every listed texel's), not
+                        // after those of later blocks only, which are idle unless lists are long:
+                        // their overflow, if any, is worked inline.
+                        if (pending_block0) {
+                            workDeferredRun();
+                        } else {
+                            workDeferredCompute(kNoWindows);
+                        }
                         pending = 0;
+                        pending_block0 = false;
                     }
+                    pending_block0 |= b0 == 0;
                     bindParams(1 + kSlotsPerBlock * b0 + c);
                     gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
                     setup_gate_.use();
@@ -1033,8 +1058,9 @@ private:
                 for (uint32_t i = 0; i < caster_count; ++i)
                     if (casters[i].triangles > 0 && casters[i].caster_class == cls) setup(casters[i], culled ? 2 : k);
             }
-            workDeferredCompute();
+            workDeferredRun();
             pending = 0;
+            pending_block0 = false;
         };
         pass(false);
         if (options_.skips.closed_casters) pass(true);
