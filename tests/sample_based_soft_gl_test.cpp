@@ -467,6 +467,11 @@ TEST_CASE("GPU sample-based soft: per-frame misuse returns a Status, setup error
         penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
         "deferred_fragments = 16776961"));
     options.deferred_fragments = 0;
+    options.overflow_windows = 65;
+    CHECK(penumbra::test::contains(
+        penumbra::test::errorOf([&] { penumbra::SampleBasedSoftShadows p(options, sets, &seed_lut, influence, vp); }),
+        "overflow_windows = 65"));
+    options.overflow_windows = 32;
     // The coverage pass's box limit beyond 2^20 texels, its records beyond one dispatch's groups.
     options.coverage_texels = (1u << 20) + 1u;
     CHECK(penumbra::test::contains(

@@ -950,16 +950,16 @@ struct SampleBasedSoftGpuOptions {
     /// uncertain bits; words past the capacity are tested in the pair's loop (same bits). 0:
     /// deferred_pairs / 4 (4 MiB by default).
     uint32_t deferred_tests = 0;
-    /// SoftLightPass::Compute: windows, in [0, 64], default 8. A run of the deferred passes whose
+    /// SoftLightPass::Compute: windows, in [0, 64], default 32. A run of the deferred passes whose
     /// pairs overflow the pairs and fragments buffers is split on the GPU into as many windows as
-    /// the fragments asked for fill the fragments buffer, plus one, at most this many: its records
-    /// r with r % windows == k worked in window k, at the pairs' speed. Only a window that
-    /// overflows too is worked by the coverage pass's inline program (SampleBasedSoftFrame::
-    /// deferral_fallbacks, ~10x slower per pair), as is an overflow in a run of list blocks past
-    /// the first only (no windows follow those). Windows follow each pass's last run and each run
-    /// holding list block 0; each is one sequence of the deferred passes' 14 dispatches, empty (no
-    /// groups) unless its run split (llvmpipe: ~4% of the bench frame's time at 8).
-    uint32_t overflow_windows = 8;
+    /// the fragments asked for fill the fragments buffer, plus one, at most this many: window k
+    /// works the run's records r with r % windows == k, at the pairs' speed (radius x16, 128 x 96:
+    /// 19 windows, 393 ns per pair against 4 070 worked inline). Only a window that overflows too
+    /// is worked by the coverage pass's inline program (SampleBasedSoftFrame::deferral_fallbacks),
+    /// as is an overflow in a run of list blocks past the first only. Windows follow each run that
+    /// holds list block 0; each is the deferred passes' 14 dispatches, empty (no groups) unless
+    /// its run split: on llvmpipe 32 idle windows cost ~5 % of the bench frame. 0: none.
+    uint32_t overflow_windows = 32;
     /// Deferred pairs: influence regions whose bounding box spans at most this many texels are
     /// not drawn; the geometry stage hands them, as records (the triangle's slot and its polygon),
     /// to a coverage pass (light_pass_coverage.comp.glsl) that visits their texels in a loop and

@@ -1058,7 +1058,11 @@ private:
                 for (uint32_t i = 0; i < caster_count; ++i)
                     if (casters[i].triangles > 0 && casters[i].caster_class == cls) setup(casters[i], culled ? 2 : k);
             }
-            workDeferredRun();
+            if (pending_block0) {
+                workDeferredRun();
+            } else {
+                workDeferredCompute(kNoWindows);
+            }
             pending = 0;
             pending_block0 = false;
         };
