@@ -957,8 +957,10 @@ struct SampleBasedSoftGpuOptions {
     /// 19 windows, 393 ns per pair against 4 070 worked inline). Only a window that overflows too
     /// is worked by the coverage pass's inline program (SampleBasedSoftFrame::deferral_fallbacks),
     /// as is an overflow in a run of list blocks past the first only. Windows follow each run that
-    /// holds list block 0; each is the deferred passes' 14 dispatches, empty (no groups) unless
-    /// its run split: on llvmpipe 32 idle windows cost ~5 % of the bench frame. 0: none.
+    /// holds list block 0 and could overflow (its records times the view samples past
+    /// deferred_pairs), as many as it could need; each is the deferred passes' 14 dispatches,
+    /// empty (no groups) unless its run split: on llvmpipe 32 idle windows cost ~5 % of the bench
+    /// frame. 0: none.
     uint32_t overflow_windows = 32;
     /// Deferred pairs: influence regions whose bounding box spans at most this many texels are
     /// not drawn; the geometry stage hands them, as records (the triangle's slot and its polygon),

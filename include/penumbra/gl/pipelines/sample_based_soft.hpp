@@ -358,6 +358,7 @@ public:
                                                                    : std::max<uint32_t>(1, options_.deferred_pairs / 2);
             const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
             const uint64_t fragment_bytes = uint64_t(fragments) * 8;
+            fragment_capacity_ = fragments;
             const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
             const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * 4 * region_words +
                                             4 * occupancy_words + 4 * tile_words;
@@ -700,6 +701,7 @@ private:
     // overflow, and its group counts; the triangle slots (and records) a deferred run holds.
     gl::Program setup_program_, setup_gate_, light_inline_, inline_args_;
     uint32_t slots_ = 0;
+    uint32_t fragment_capacity_ = 0;  // deferred fragments (with deferred_pairs)
     uint32_t coverage_bit_groups_ = 0;  // the occupancy bits' groups (coverage_texels)
     // The coverage pass's work items: tile counts per record, their scan into first items.
     static constexpr uint64_t kCoverageItemIterations = 16384;
@@ -987,10 +989,25 @@ private:
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
 
-    /// A run of the deferred passes, then its windows (nothing to do unless the run overflowed).
-    void workDeferredRun() {
-        workDeferredCompute(options_.overflow_windows > 0 ? 0u : kNoWindows);
-        for (uint32_t k = 0; k < options_.overflow_windows; ++k) workDeferredCompute(k + 1);
+    /// The windows a run of at most `records` (triangle, list block) records may split into: none
+    /// when its pairs cannot fill the pairs buffer (a record pairs with each view sample at most
+    /// once) or its fragments the fragments buffer; else as many as its fragments could fill the
+    /// fragments buffer, plus one, at most overflow_windows. The GPU's split
+    /// (light_pass_args.comp.glsl) never exceeds this: the windows not issued would find no work.
+    uint32_t runWindows(uint64_t records) const {
+        const uint64_t samples = std::max<uint32_t>(setup_.sample_count, 1);
+        if (records * samples <= options_.deferred_pairs) return 0;
+        const uint64_t fragments = records * std::min<uint64_t>(samples, uint64_t(options_.grid_width) * options_.grid_height);
+        if (fragments <= fragment_capacity_) return 0;
+        return static_cast<uint32_t>(std::min<uint64_t>(options_.overflow_windows, detail::divUp(fragments, fragment_capacity_) + 1));
+    }
+
+    /// A run of the deferred passes over at most `records` records, then its windows (nothing to
+    /// do unless the run overflowed).
+    void workDeferredRun(uint64_t records) {
+        const uint32_t windows = runWindows(records);
+        workDeferredCompute(windows > 0 ? 0u : kNoWindows);
+        for (uint32_t k = 0; k < windows; ++k) workDeferredCompute(k + 1);
     }
 
     /// SoftLightPass::Compute's light pass: per list block and class the setup of every range
@@ -1030,7 +1047,7 @@ private:
                         // after those of later blocks only, which are idle unless lists are long:
                         // their overflow, if any, is worked inline.
                         if (pending_block0) {
-                            workDeferredRun();
+                            workDeferredRun(pending);
                         } else {
                             workDeferredCompute(kNoWindows);
                         }
@@ -1059,7 +1076,7 @@ private:
                     if (casters[i].triangles > 0 && casters[i].caster_class == cls) setup(casters[i], culled ? 2 : k);
             }
             if (pending_block0) {
-                workDeferredRun();
+                workDeferredRun(pending);
             } else {
                 workDeferredCompute(kNoWindows);
             }
