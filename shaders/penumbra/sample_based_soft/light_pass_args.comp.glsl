@@ -13,7 +13,8 @@
 // the coverage pass (light_pass_coverage.comp.glsl) after the draws, before kind 0 (the records
 // past its capacity were drawn); kind 4 (the compute light pass, after kind 0): the coverage pass's
 // group counts again for its program that works the pairs itself, when kind 0 found an overflow
-// (else 0 groups): one workgroup per (record, tile) item; kind 5 (after the
+// (else 0 groups): PENUMBRA_SBS_INLINE_PARTS workgroups per (record, tile) item of
+// PENUMBRA_SBS_TILE_ROWS x PENUMBRA_SBS_TILE_COLUMNS texels; kind 5 (after the
 // coverage pass's tile counts and their scan): its (record, tile) items and group counts, folded
 // into x and y. Kind 3 with PENUMBRA_SBS_ARGS_ROUND=1 (the compute light pass, first of a run of
 // the deferred passes): when nothing waits for them (no record, slot, pair, fragment or setup count
@@ -39,7 +40,7 @@
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1 PENUMBRA_SBS_COUNT_WORK=0
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=3 PENUMBRA_SBS_ARGS_CAPACITY=1024u PENUMBRA_SBS_ARGS_ROUND=1 PENUMBRA_SBS_ARGS_WINDOWS=8
-// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=4
+// penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=4 PENUMBRA_SBS_TILE_ROWS=8u PENUMBRA_SBS_TILE_COLUMNS=32u
 // penumbra-permutation: PENUMBRA_SBS_ARGS_KIND=5 PENUMBRA_SBS_REGION_CAPACITY=64u PENUMBRA_SBS_TILE_BASE=0u
 #include "penumbra/sample_based_soft/sample_based_soft_shared.h"
 
@@ -96,26 +97,32 @@ layout(location = 0) uniform uint penumbraSbsWindow;  // 0: a run; k + 1: window
 layout(std430, binding = PENUMBRA_SBS_TRIANGLES_BINDING) readonly buffer PenumbraSbsTriangles { uint penumbraSbsTriangles[]; };
 #endif
 
+#if PENUMBRA_SBS_ARGS_KIND == 4 || PENUMBRA_SBS_ARGS_KIND == 5
+// The group counts of `groups` workgroups at deferral word `words`, folded into x and y (at most
+// 65 535 per dimension, GL's minimum); the programs index their groups y * x + x.
+void penumbraSbsFoldedArgs(uint words, uint groups) {
+    const uint x = min(groups, 65535u);
+    penumbraSbsDeferral[words] = x;
+    penumbraSbsDeferral[words + 1u] = x == 0u ? 1u : (groups + x - 1u) / x;
+    penumbraSbsDeferral[words + 2u] = 1u;
+}
+#endif
+
 void main() {
 #if PENUMBRA_SBS_ARGS_KIND == 4
-    // One workgroup per item (its texels the invocations), folded into x and y.
+    // The inline program's workgroups (its tile's texels the invocations), none without an
+    // overflow.
     const bool overflow = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_FALLBACK] != 0u;
     const uint items = overflow ? penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ITEMS_DISPATCHED] : 0u;
-    const uint x = min(items, 65535u);
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS] = x;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS + 1] = x == 0u ? 1u : (items + x - 1u) / x;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_INLINE_ARGS + 2] = 1u;
+    const uint parts = PENUMBRA_SBS_INLINE_PARTS(PENUMBRA_SBS_TILE_ROWS * PENUMBRA_SBS_TILE_COLUMNS);
+    penumbraSbsFoldedArgs(PENUMBRA_SBS_DEFERRAL_INLINE_ARGS, items * parts);
 #elif PENUMBRA_SBS_ARGS_KIND == 5
     const uint records = penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGIONS_DISPATCHED];
     const uint counts = uint(PENUMBRA_SBS_TILE_BASE), firsts = counts + 3u * uint(PENUMBRA_SBS_REGION_CAPACITY);
     const uint items = records == 0u ? 0u : penumbraSbsTriangles[firsts + records - 1u] + penumbraSbsTriangles[counts + records - 1u];
     penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_ITEMS_DISPATCHED] = items;
-    // At most 65 535 groups per dimension (GL's minimum): folded into y.
-    const uint groups = (items + uint(PENUMBRA_SBS_COVERAGE_GROUP) - 1u) / uint(PENUMBRA_SBS_COVERAGE_GROUP);
-    const uint x = min(groups, 65535u);
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS] = x;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 1] = x == 0u ? 1u : (groups + x - 1u) / x;
-    penumbraSbsDeferral[PENUMBRA_SBS_DEFERRAL_REGION_ARGS + 2] = 1u;
+    const uint group = uint(PENUMBRA_SBS_COVERAGE_GROUP);
+    penumbraSbsFoldedArgs(PENUMBRA_SBS_DEFERRAL_REGION_ARGS, (items + group - 1u) / group);
 #elif PENUMBRA_SBS_ARGS_KIND != 0
 #if PENUMBRA_SBS_ARGS_ROUND
 #if PENUMBRA_SBS_ARGS_WINDOWS > 0

@@ -20,8 +20,8 @@
 //     counts into each record's first item (an exclusive scan: its cost follows the records);
 //   the default: one invocation per (record, tile) item (the record found by binary search over
 //     the first items) visits the tile's texels of the polygon;
-//   PENUMBRA_SBS_COVERAGE_INLINE=1 (SoftLightPass::Compute): one workgroup per item, one invocation
-//     per texel of its tile, works the texel's block itself, as the per-fragment program does
+//   PENUMBRA_SBS_COVERAGE_INLINE=1 (SoftLightPass::Compute): workgroups of at most 64 texels of an
+//     item's tile, one invocation per texel, works the texel's block itself, as the per-fragment program does
 //     (light_pass.comp.glsl), counting straight into the work counters; its group counts are 0
 //     unless the deferred pairs and fragments overflowed (the compute twin of the raster pass's
 //     redraw);
@@ -95,7 +95,12 @@
 #if PENUMBRA_SBS_COVERAGE_SCAN
 layout(local_size_x = PENUMBRA_SBS_COVERAGE_SCAN_GROUP) in;
 #elif PENUMBRA_SBS_COVERAGE_INLINE
-layout(local_size_x = PENUMBRA_SBS_TILE_ROWS * PENUMBRA_SBS_TILE_COLUMNS) in;  // one invocation per texel of a tile
+// One invocation per texel (its loops within llvmpipe's bound, as the per-fragment program's), at
+// most 64 per workgroup: a texel's work holds arrays in private memory (spilled on GPUs, allocated
+// per workgroup by llvmpipe: 1.7 kB a texel), so a whole tile's workgroup (256 texels) asked for 4x
+// the other programs' scratch.
+#define PENUMBRA_SBS_TILE_TEXELS (PENUMBRA_SBS_TILE_ROWS * PENUMBRA_SBS_TILE_COLUMNS)
+layout(local_size_x = PENUMBRA_SBS_INLINE_GROUP(PENUMBRA_SBS_TILE_TEXELS)) in;
 #else
 layout(local_size_x = PENUMBRA_SBS_COVERAGE_GROUP) in;
 #endif
@@ -281,17 +286,22 @@ bool penumbraSbsItem(uint i, out uint r, out uvec2 tile) {
 }
 
 #if PENUMBRA_SBS_COVERAGE_INLINE
-// The inline program: one workgroup per (record, tile) item, one invocation per texel of the
-// tile. The item's lookup (a binary search) and its rows' spans are computed once per workgroup,
-// by the first invocation and one invocation per row, and shared: a texel whose list block is
-// empty costs a few reads. Each texel the coverage rule visits whose block is not empty is worked
+// The inline program: PENUMBRA_SBS_INLINE_PARTS workgroups per (record, tile) item, each a run
+// of the tile's texels (row-major), one invocation per texel. The item's lookup (a binary search)
+// and the spans of the rows the run meets are computed once per workgroup, by the first
+// invocation and one invocation per row, and shared: a texel whose list block is empty costs a
+// few reads. Each texel the coverage rule visits whose block is not empty is worked
 // whole (the per-fragment program's work, light_pass.comp.glsl), counted at once.
 shared uint penumbraSbsItemRecord, penumbraSbsItemTile, penumbraSbsItemLive;
 shared ivec2 penumbraSbsRowSpan[PENUMBRA_SBS_TILE_ROWS];
 
 void main() {
-    // Items folded into x and y (light_pass_args.comp.glsl, kind 4).
-    const uint i = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    // Items' parts folded into x and y (light_pass_args.comp.glsl, kind 4).
+    const uint part = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uint parts = PENUMBRA_SBS_INLINE_PARTS(PENUMBRA_SBS_TILE_TEXELS);
+    const uint i = part / parts;
+    const uint k = (part % parts) * gl_WorkGroupSize.x + gl_LocalInvocationID.x;  // the texel of the tile
+    const uint row_first = (part % parts) * gl_WorkGroupSize.x / PENUMBRA_SBS_TILE_COLUMNS;
     const uint t = gl_LocalInvocationID.x;
     if (t == 0u) {
         uint r;
@@ -313,13 +323,14 @@ void main() {
     const uint r = penumbraSbsItemRecord;
     const uvec2 tile = uvec2(penumbraSbsItemTile & 0xFFFFu, penumbraSbsItemTile >> 16u);
     const ivec2 tile_origin = ivec2(tile * uvec2(PENUMBRA_SBS_TILE_COLUMNS, PENUMBRA_SBS_TILE_ROWS));
-    if (t < PENUMBRA_SBS_TILE_ROWS) {
-        // Row t of the tile: the texels the coverage rule visits (none outside the polygon's rows,
+    const uint row = row_first + t;  // the rows this run meets, each an invocation's (rows <= texels)
+    if (row < PENUMBRA_SBS_TILE_ROWS && row * PENUMBRA_SBS_TILE_COLUMNS < (part % parts + 1u) * gl_WorkGroupSize.x) {
+        // The tile's row: the texels the coverage rule visits (none outside the polygon's rows,
         // the grid, or where no texel of the tile's row is listed).
         uint slot;
         vec2 lo, hi;
         const int n = penumbraSbsLoadRecord(r, slot, lo, hi);
-        const int y = tile_origin.y + int(t);
+        const int y = tile_origin.y + int(row);
         const ivec2 rows = penumbraSbsCoverageRange(double(lo.y), double(hi.y), int(penumbraSbsParams.grid.y));
         const uint tile_word = uint(tile_origin.x) >> 5u, tile_shift = uint(tile_origin.x) & 31u;
         const uint tile_bits = (PENUMBRA_SBS_TILE_COLUMNS >= 32u ? 0xFFFFFFFFu : (1u << PENUMBRA_SBS_TILE_COLUMNS) - 1u) << tile_shift;
@@ -327,11 +338,12 @@ void main() {
         if (y >= rows.x && y <= rows.y &&
             (penumbraSbsTriangles[uint(PENUMBRA_SBS_OCCUPANCY_BASE) + uint(y) * PENUMBRA_SBS_OCCUPANCY_ROW + tile_word] & tile_bits) != 0u)
             span = penumbraSbsCoverageSpan(n, y, int(penumbraSbsParams.grid.x));
-        penumbraSbsRowSpan[t] = span;
+        penumbraSbsRowSpan[row] = span;
     }
     barrier();
-    const ivec2 texel = tile_origin + ivec2(int(t % PENUMBRA_SBS_TILE_COLUMNS), int(t / PENUMBRA_SBS_TILE_COLUMNS));
-    const ivec2 span = penumbraSbsRowSpan[t / PENUMBRA_SBS_TILE_COLUMNS];
+    if (k >= PENUMBRA_SBS_TILE_TEXELS) return;  // past the tile (its last part)
+    const ivec2 texel = tile_origin + ivec2(int(k % PENUMBRA_SBS_TILE_COLUMNS), int(k / PENUMBRA_SBS_TILE_COLUMNS));
+    const ivec2 span = penumbraSbsRowSpan[k / PENUMBRA_SBS_TILE_COLUMNS];
     if (texel.x < span.x || texel.x > span.y) return;  // outside the polygon, the grid or every listed row
     if ((penumbraSbsTriangles[uint(PENUMBRA_SBS_OCCUPANCY_BASE) + uint(texel.y) * PENUMBRA_SBS_OCCUPANCY_ROW + (uint(texel.x) >> 5u)] &
          (1u << (uint(texel.x) & 31u))) == 0u)

@@ -175,6 +175,11 @@
 #define PENUMBRA_SBS_DEFERRAL_GROUP 256      // light_pass.comp.glsl's workgroup size
 #define PENUMBRA_SBS_COVERAGE_GROUP 64      // light_pass_coverage.comp.glsl's workgroup size
 #define PENUMBRA_SBS_SETUP_GROUP 64         // light_pass_setup.comp.glsl's workgroup size
+// The coverage pass's inline program: workgroups of at most 64 invocations, one per texel of a
+// (record, tile) item, PENUMBRA_SBS_INLINE_PARTS(rows * columns) of them per item.
+#define PENUMBRA_SBS_INLINE_GROUP(texels) ((texels) < 64u ? (texels) : 64u)
+#define PENUMBRA_SBS_INLINE_PARTS(texels) \
+    (((texels) + PENUMBRA_SBS_INLINE_GROUP(texels) - 1u) / PENUMBRA_SBS_INLINE_GROUP(texels))
 #define PENUMBRA_SBS_COVERAGE_SCAN_GROUP 256  // the coverage pass's scan of first items (one workgroup)
 // A region record (coverage, after the triangle slots in the triangles buffer): the triangle's
 // slot, the polygon's vertex count n, then n vec2 (grid pixels) as float bits.

@@ -374,7 +374,7 @@ public:
                 if (round) d.push_back({"PENUMBRA_SBS_ARGS_ROUND", "1"});
                 if (compute && (kind == 0 || round) && options_.overflow_windows > 0)
                     d.push_back({"PENUMBRA_SBS_ARGS_WINDOWS", std::to_string(options_.overflow_windows)});
-                if (kind == 5) d.insert(d.end(), region_defines.begin(), region_defines.end());
+                if (kind == 4 || kind == 5) d.insert(d.end(), region_defines.begin(), region_defines.end());  // the tiles
                 d.push_back({"PENUMBRA_SBS_ARGS_KIND", std::to_string(kind)});
                 d.push_back({"PENUMBRA_SBS_ARGS_CAPACITY", std::to_string(capacity) + "u"});
                 d.push_back({"PENUMBRA_SBS_ARGS_FRAGMENT_CAPACITY", std::to_string(fragments) + "u"});
@@ -950,13 +950,14 @@ private:
         }
     }
 
+    /// workDeferredCompute's window of a run that no windows follow (its overflow is worked inline).
+    static constexpr uint32_t kNoWindows = 0xFFFFFFFFu;
     /// SoftLightPass::Compute, after the deferred passes' setup of the triangles dispatched since the
     /// last call: the coverage pass appends their regions' pairs, the pairs, fragments, tables and
     /// exact-test passes work them, and when the pairs and fragments overflowed the coverage pass's
     /// inline program works every region itself instead (group counts decided on the GPU).
     /// `window`: 0 a run that windows follow, k + 1 window k of the last run, kNoWindows a run
-    /// none follow (its overflow is worked inline).
-    static constexpr uint32_t kNoWindows = 0xFFFFFFFFu;
+    /// none follow.
     void workDeferredCompute(uint32_t window) {
         if (options_.overflow_windows > 0)  // light_pass_args.comp.glsl's penumbraSbsWindow
             for (const gl::Program* program : {&region_args_, &coverage_count_, &deferral_args_})
