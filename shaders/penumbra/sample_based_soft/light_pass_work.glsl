@@ -82,15 +82,15 @@ layout(std430, binding = PENUMBRA_SBS_WORK_BINDING) buffer PenumbraSbsWork { uin
 layout(std430, binding = PENUMBRA_SBS_DEFERRAL_BINDING) buffer PenumbraSbsDeferral { uint penumbraSbsDeferral[]; };
 // (list slot, triangle slot, mask word, its bits): one pending word per entry.
 layout(std430, binding = PENUMBRA_SBS_TESTS_BINDING) writeonly buffer PenumbraSbsTests { uvec4 penumbraSbsTests[]; };
-uint penumbraSbsTestTriangle;  // the triangle slot of the pair being worked (the compute passes set it)
+uint penumbraSbsTestTriangle = 0u;  // the triangle slot of the pair being worked (the compute passes set it)
 #endif
 #if PENUMBRA_SBS_STAGE == 1
 // Set by the compute pass: 1 in the per-fragment program (the fragment is counted with its block),
 // 0 in the pairs' (the fragment stage counted the fragment when it appended its pairs).
-uint penumbraSbsFragmentPairs;
+uint penumbraSbsFragmentPairs = 0u;
 #endif
 #if PENUMBRA_SBS_TABLES_HANDED_ON
-uint penumbraSbsPairIndex;  // the pair's index in the pairs buffer (the compute pass sets it)
+uint penumbraSbsPairIndex = 0u;  // the pair's index in the pairs buffer (the compute pass sets it)
 // The pairs that need the LUT's tables, by index in the pairs buffer: as long as that buffer, so
 // never full (each pair adds at most one).
 layout(std430, binding = PENUMBRA_SBS_TABLE_PAIRS_BINDING) writeonly buffer PenumbraSbsTableWork { uint penumbraSbsTableWork[]; };
