@@ -60,7 +60,8 @@
 //                                    with the compute pass: runs whose pairs the coverage pass
 //                                    worked itself), chunks (compute pass: runs of the deferred
 //                                    passes that had work), gpu_bytes (memoryBytes(): all the
-//                                    pipeline allocated), ns_per_pair (ms / pairs).
+//                                    pipeline allocated), gpu_bytes_bound (memoryBound(): known
+//                                    before construction, >= gpu_bytes), ns_per_pair (ms / pairs).
 //   BM_SoftShadowsNScaling           exact and lut at N = 128 and 1024, all four interleaved:
 //                                    n1024_over_n128 = ms_exact_n1024 / ms (exact at 128; target
 //                                    <= 1.5, the seed's Fig. 13 ~2), n1024_over_n128_lut.
@@ -514,6 +515,8 @@ penumbra::SampleBasedSoftFrame setWork(benchmark::State& state, const View& v, c
     state.counters["deferral_fallbacks"] = double(f.deferral_fallbacks);
     state.counters["chunks"] = double(f.chunks);
     state.counters["gpu_bytes"] = double(counting.pipeline.memoryBytes());
+    state.counters["gpu_bytes_bound"] = double(penumbra::SampleBasedSoftShadows::memoryBound(
+        Ours::options(mode, true, penumbra::SampleBasedSoftGpuOptions{}.coverage_texels, pass), c.sets, c.influence, v.count));
     return f;
 }
 

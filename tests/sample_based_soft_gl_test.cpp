@@ -1574,6 +1574,67 @@ std::vector<std::string> sharedObjNames() {
 
 }  // namespace
 
+TEST_CASE("memoryBound: before construction, what reserve() makes the pipeline allocate, and no frame more") {
+    penumbra::test::context();
+    const penumbra::test::GlWorld w(penumbra::scene::builtin("torus_knot"));
+    const penumbra::test::GlSoftLight soft(w, 64, 64, 128);
+    const penumbra::BufferRange table = soft.table();
+    const GLint alignment = penumbra::gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT);
+    REQUIRE(alignment > 0);
+    REQUIRE(alignment <= 256);
+    const auto stride = [](size_t align) { return (sizeof(penumbra::SbsParams) + align - 1) / align * align; };
+    struct Case {
+        const char* name;
+        penumbra::SoftLightPass pass;
+        uint32_t deferred_pairs, coverage_texels;
+        bool empty_blocks, closed_casters, silhouettes;
+    };
+    for (const Case c : {Case{"raster, defaults", penumbra::SoftLightPass::Raster, 1u << 20, 64, true, true, false},
+                         Case{"raster, no deferred pairs", penumbra::SoftLightPass::Raster, 0, 0, true, false, false},
+                         Case{"raster, no coverage, no stencil", penumbra::SoftLightPass::Raster, 1u << 16, 0, false, true, false},
+                         Case{"compute", penumbra::SoftLightPass::Compute, 1u << 20, 64, true, true, false},
+                         Case{"compute, small buffers", penumbra::SoftLightPass::Compute, 4096, 64, false, false, false},
+                         Case{"raster, small buffers, silhouettes", penumbra::SoftLightPass::Raster, 4096, 64, false, false, true}}) {
+        CAPTURE(c.name);
+        penumbra::SampleBasedSoftGpuOptions options;
+        options.light_pass = c.pass;
+        options.grid_width = options.grid_height = 64;
+        options.deferred_pairs = c.deferred_pairs;
+        options.coverage_texels = c.coverage_texels;
+        options.skips.empty_blocks = c.empty_blocks;
+        options.skips.closed_casters = c.closed_casters;
+        options.skips.silhouettes = c.silhouettes;
+        options.max_list_blocks = 32;
+        const uint32_t max_samples = w.samples() + 1000;  // more than a frame uses
+        const uint64_t bound = penumbra::SampleBasedSoftShadows::memoryBound(options, soft.sets, soft.influence, max_samples);
+        penumbra::SampleBasedSoftShadows pipeline(options, soft.sets, &soft.lut, soft.influence, w.light.view_projection);
+        pipeline.reserve(max_samples);
+        const uint64_t reserved = pipeline.memoryBytes();
+        // The bound is what was allocated, but the parameter slots' alignment (256 bytes in it).
+        const uint64_t slack = (stride(256) - stride(size_t(alignment))) * (1 + 6 * uint64_t(options.max_list_blocks));
+        MESSAGE(std::string(c.name), ": memoryBound ", bound, " bytes, allocated ", reserved, " (uniform alignment ", alignment, ")");
+        CHECK(bound == reserved + slack);
+        if (c.silhouettes) continue;  // a run with silhouettes needs the adjacency draw; the sizes are checked
+        Status status;
+        if (c.pass == penumbra::SoftLightPass::Compute) {
+            status = pipeline.run(w.depthInput(), table, w.gpu.casterBuffers().data(), uint32_t(w.gpu.casterBuffers().size()));
+        } else {
+            status = pipeline.run(w.depthInput(), table, [&](penumbra::CasterClass k) { w.drawClass(k); });
+        }
+        REQUIRE(status == Status::Ok);
+        CHECK(pipeline.memoryBytes() == reserved);
+    }
+    // Bad options: the constructor's errors, naming the values.
+    penumbra::SampleBasedSoftGpuOptions bad;
+    bad.grid_width = 0;
+    bad.grid_height = 64;
+    CHECK_THROWS_WITH(penumbra::SampleBasedSoftShadows::memoryBound(bad, soft.sets, soft.influence, 100),
+                      doctest::Contains("grid 0 x 64 must be 1 .. 8192 per side"));
+    bad.grid_width = bad.grid_height = 32;
+    CHECK_THROWS_WITH(penumbra::SampleBasedSoftShadows::memoryBound(bad, soft.sets, soft.influence, 100),
+                      doctest::Contains("the influence setup's grid 64 x 64 differs from the options' 32 x 32"));
+}
+
 TEST_CASE("Compute light pass: the raster pass's bits, both inputs, small capacities (torus knot, columns, one OBJ)") {
     std::vector<std::string> names = {"torus_knot", "columns"};
     const std::vector<std::string> objs = sharedObjNames();

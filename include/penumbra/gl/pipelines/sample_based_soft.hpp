@@ -282,35 +282,15 @@ public:
                            " is not below ", uniform ? "GL_MAX_UNIFORM_BUFFER_BINDINGS = " : "GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS = ",
                            limit, " (choose lower SbsBindings", deferred ? ", or set deferred_pairs = 0)" : ")");
         }
-        // Coverage (options.coverage_texels; every region with the compute light pass): records
-        // after the triangle slots.
-        const uint32_t slots = options_.deferred_triangles ? options_.deferred_triangles
-                               : compute                   ? 1u << 17
-                                                           : std::max<uint32_t>(1, options_.deferred_pairs / 4);
-        const bool coverage = compute || (deferred && options_.coverage_texels > 0);
-        const uint32_t regions = !coverage                    ? 0u
-                                 : compute                    ? slots
-                                 : options_.deferred_regions ? options_.deferred_regions
-                                                             : std::min<uint32_t>(slots, 1u << 16);
-        slots_ = slots;
-        const uint32_t region_words = 2u + 2u * uint32_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence.sides()));
+        const Capacities cap = capacities(options_, influence.sides());
+        const bool coverage = cap.regions > 0;
+        const uint32_t slots = cap.slots, regions = cap.regions, region_words = cap.region_words;
         const uint32_t occupancy_row = (options_.grid_width + 31) / 32;
-        const uint64_t occupancy_words = coverage ? uint64_t(occupancy_row) * options_.grid_height : 0u;
-        // The coverage pass's work items: tiles of tile_rows_ x tile_columns_ texels, each within
-        // ~16k loop iterations (llvmpipe silently ends an invocation's loops at 65 535 in all):
-        // per row the polygon's edges and an occupancy word, per texel a list block's appends
-        // (wedge tests, pairs, the straddling fragment's empty pairs: 3 list_block + 4).
-        {
-            const uint64_t per_texel = 3ull * options_.list_block + 4;
-            const uint64_t per_row = uint64_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence.sides())) + 4;
-            tile_columns_ = 32;
-            while (tile_columns_ > 1 && per_row + tile_columns_ * per_texel > kCoverageItemIterations) tile_columns_ /= 2;
-            tile_rows_ = static_cast<uint32_t>(
-                std::clamp<uint64_t>(kCoverageItemIterations / (per_row + tile_columns_ * per_texel), 1, 8));
-        }
-        grid_tiles_ = detail::divUp(options_.grid_width, tile_columns_) * detail::divUp(options_.grid_height, tile_rows_);
-        // Per record its tile count, 2 box words and first item; per tile of the grid its longest list.
-        const uint64_t tile_words = coverage ? 4ull * regions + grid_tiles_ : 0u;
+        const uint64_t occupancy_words = cap.occupancy_words;
+        slots_ = slots;
+        tile_rows_ = cap.tile_rows;
+        tile_columns_ = cap.tile_columns;
+        grid_tiles_ = cap.grid_tiles;
         ShaderDefines region_defines;
         if (coverage) {
             region_defines.push_back({"PENUMBRA_SBS_REGION_BASE", std::to_string(uint64_t(slots) * PENUMBRA_SBS_TRIANGLE_WORDS) + "u"});
@@ -352,16 +332,10 @@ public:
                            compute_blocks, "; set deferred_pairs = 0");
             const uint32_t triangles = slots;
             const uint64_t max_block = uint64_t(gl::getInteger64(GL_MAX_SHADER_STORAGE_BLOCK_SIZE));
-            const uint32_t test_words = options_.deferred_tests ? options_.deferred_tests
-                                                                : std::max<uint32_t>(1, options_.deferred_pairs / 4);
-            const uint32_t fragments = options_.deferred_fragments ? options_.deferred_fragments
-                                                                   : std::max<uint32_t>(1, options_.deferred_pairs / 2);
-            const uint64_t pair_bytes = uint64_t(options_.deferred_pairs) * 8, test_bytes = uint64_t(test_words) * 16;
-            const uint64_t fragment_bytes = uint64_t(fragments) * 8;
+            const uint32_t test_words = cap.test_words, fragments = cap.fragments;
+            const uint64_t pair_bytes = cap.pair_bytes, test_bytes = cap.test_bytes, fragment_bytes = cap.fragment_bytes;
+            const uint64_t table_bytes = cap.table_bytes, triangle_bytes = cap.triangle_bytes;
             fragment_capacity_ = fragments;
-            const uint64_t table_bytes = uint64_t(options_.deferred_pairs) * 4;  // every pair may need the tables
-            const uint64_t triangle_bytes = uint64_t(triangles) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(regions) * 4 * region_words +
-                                            4 * occupancy_words + 4 * tile_words;
             PENUMBRA_CHECK(pair_bytes <= max_block && triangle_bytes <= max_block && test_bytes <= max_block &&
                                fragment_bytes <= max_block,
                            "penumbra::SampleBasedSoftShadows: deferred_pairs = ", options_.deferred_pairs, " (", pair_bytes,
@@ -677,6 +651,39 @@ public:
             bytes += b->size();
         return bytes;
     }
+    /// The GPU memory a pipeline built with these options, light sample sets and influence setup
+    /// allocates at most, through reserve(max_samples): an upper bound of memoryBytes(), known
+    /// before construction (no GL call), with the parameter slots at the largest uniform-buffer
+    /// offset alignment GL allows (256 bytes; drivers' smaller alignments allocate less). Frames
+    /// allocate nothing beyond it, whatever their triangles and pairs: what does not fit the
+    /// deferred buffers is split into chunks (SampleBasedSoftFrame::chunks).
+    static uint64_t memoryBound(const SampleBasedSoftGpuOptions& options, const LightSampleSets& sets,
+                                const InfluenceRegionSetup& influence, uint32_t max_samples) {
+        validateSampleBasedSoftGpuOptions(options);
+        PENUMBRA_CHECK(uint32_t(influence.width()) == options.grid_width && uint32_t(influence.height()) == options.grid_height,
+                       "penumbra::SampleBasedSoftShadows::memoryBound: the influence setup's grid ", influence.width(), " x ",
+                       influence.height(), " differs from the options' ", options.grid_width, " x ", options.grid_height);
+        const bool compute = options.light_pass == SoftLightPass::Compute;
+        const uint64_t texels = uint64_t(options.grid_width) * options.grid_height;
+        uint64_t bytes = options.skips.empty_blocks && !compute ? texels : 0u;  // the stencil
+        if (options.deferred_pairs > 0) {
+            const Capacities c = capacities(options, influence.sides());
+            bytes += PENUMBRA_SBS_DEFERRAL_WORDS * 4 + c.pair_bytes + c.test_bytes + c.fragment_bytes + c.table_bytes + c.triangle_bytes;
+        }
+        if (options.skips.silhouettes) bytes += texels * 4;  // the texel marks
+        bytes += detail::divUp(sizeof(SbsParams), size_t(256)) * 256 * (1 + kSlotsPerBlock * uint64_t(options.max_list_blocks));
+        bytes += sizeof(InfluenceRegionParams) + PENUMBRA_SBS_WORK_WORDS * 4 + 16;  // + the dummy binding
+        bytes += (uint64_t(sets.count()) * sets.sets() + 1) * options.rotations * sizeof(glm::dvec4);  // the sample table
+        // The lists (lengths, offsets, header, frustum; per sample its position, id, slot and
+        // texel), then per sample its mask, visibility and, with closed_casters, near flag.
+        const SampleListsSetup lists = sampleListsSetup(options.grid_width, options.grid_height, max_samples);
+        const uint64_t samples = std::max<uint32_t>(max_samples, 1);
+        const uint64_t words = (sets.count() + 31) / 32;
+        bytes += lists.counts_bytes + lists.offsets_bytes + lists.header_bytes + sizeof(SampleListsFrustum) + samples * 28;
+        bytes += samples * (words + 1) * 4;
+        if (options.skips.closed_casters) bytes += (samples + texels) * 4;
+        return bytes;
+    }
     /// The light grid's view-projection (the influence setup's, which the lists use too).
     const glm::mat4& viewProjection() const { return vp_; }
 
@@ -705,6 +712,46 @@ private:
     uint32_t coverage_bit_groups_ = 0;  // the occupancy bits' groups (coverage_texels)
     // The coverage pass's work items: tile counts per record, their scan into first items.
     static constexpr uint64_t kCoverageItemIterations = 16384;
+    /// The deferred passes' capacities and buffer sizes the options ask for (with deferred_pairs;
+    /// the coverage records with coverage_texels or the compute light pass).
+    struct Capacities {
+        uint32_t slots = 0, regions = 0, region_words = 0, test_words = 0, fragments = 0;
+        uint32_t tile_rows = 8, tile_columns = 32;
+        uint64_t grid_tiles = 0, occupancy_words = 0;
+        uint64_t pair_bytes = 0, test_bytes = 0, fragment_bytes = 0, table_bytes = 0, triangle_bytes = 0;
+    };
+    static Capacities capacities(const SampleBasedSoftGpuOptions& o, int influence_sides) {
+        Capacities c;
+        const bool compute = o.light_pass == SoftLightPass::Compute, deferred = o.deferred_pairs > 0;
+        // Coverage (coverage_texels; every region with the compute light pass): records after the
+        // triangle slots.
+        c.slots = o.deferred_triangles ? o.deferred_triangles : compute ? 1u << 17 : std::max<uint32_t>(1, o.deferred_pairs / 4);
+        const bool coverage = compute || (deferred && o.coverage_texels > 0);
+        c.regions = !coverage ? 0u : compute ? c.slots : o.deferred_regions ? o.deferred_regions : std::min<uint32_t>(c.slots, 1u << 16);
+        c.region_words = 2u + 2u * uint32_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence_sides));
+        c.occupancy_words = coverage ? uint64_t((o.grid_width + 31) / 32) * o.grid_height : 0u;
+        // The coverage pass's work items: tiles of tile_rows x tile_columns texels, each within
+        // ~16k loop iterations (llvmpipe silently ends an invocation's loops at 65 535 in all):
+        // per row the polygon's edges and an occupancy word, per texel a list block's appends
+        // (wedge tests, pairs, the straddling fragment's empty pairs: 3 list_block + 4).
+        const uint64_t per_texel = 3ull * o.list_block + 4;
+        const uint64_t per_row = uint64_t(PENUMBRA_INFLUENCE_MAX_VERTICES(influence_sides)) + 4;
+        while (c.tile_columns > 1 && per_row + c.tile_columns * per_texel > kCoverageItemIterations) c.tile_columns /= 2;
+        c.tile_rows = static_cast<uint32_t>(std::clamp<uint64_t>(kCoverageItemIterations / (per_row + c.tile_columns * per_texel), 1, 8));
+        c.grid_tiles = detail::divUp(o.grid_width, c.tile_columns) * detail::divUp(o.grid_height, c.tile_rows);
+        if (!deferred) return c;
+        // Per record its tile count, 2 box words and first item; per tile of the grid its longest list.
+        const uint64_t tile_words = coverage ? 4ull * c.regions + c.grid_tiles : 0u;
+        c.test_words = o.deferred_tests ? o.deferred_tests : std::max<uint32_t>(1, o.deferred_pairs / 4);
+        c.fragments = o.deferred_fragments ? o.deferred_fragments : std::max<uint32_t>(1, o.deferred_pairs / 2);
+        c.pair_bytes = uint64_t(o.deferred_pairs) * 8;
+        c.test_bytes = uint64_t(c.test_words) * 16;
+        c.fragment_bytes = uint64_t(c.fragments) * 8;
+        c.table_bytes = uint64_t(o.deferred_pairs) * 4;  // every pair may need the tables
+        c.triangle_bytes = uint64_t(c.slots) * 4 * PENUMBRA_SBS_TRIANGLE_WORDS + uint64_t(c.regions) * 4 * c.region_words +
+                           4 * c.occupancy_words + 4 * tile_words;
+        return c;
+    }
     gl::Program coverage_count_, coverage_scan_, item_args_;
     uint32_t tile_rows_ = 8, tile_columns_ = 32, regions_ = 0;
     uint64_t tile_base_ = 0;   // the tile counts' first word in the triangles buffer
