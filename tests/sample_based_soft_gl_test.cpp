@@ -1027,7 +1027,8 @@ TEST_CASE("SoftSkips::silhouettes: grazing and near-plane lights on a fitted gri
         penumbra::SampleListsOptions fit_options;
         fit_options.cull_back_facing = false;
         fit_options.depth_range = penumbra::LightDepthRange::Unclipped;
-        for (const uint32_t grid : {128u, 256u}) {
+        // The sanitizer build: the 128^2 grid only (the host code is the same at 256^2).
+        for (const uint32_t grid : penumbra::test::kSanitized ? std::vector<uint32_t>{128u} : std::vector<uint32_t>{128u, 256u}) {
             const penumbra::LightFrustumFit fit = penumbra::fitLightFrustumCpu(
                 penumbra::sampleListsSetup(grid, grid, w.samples()), w.light, positions.data(), nullptr, fit_options);
             REQUIRE(fit.valid);
