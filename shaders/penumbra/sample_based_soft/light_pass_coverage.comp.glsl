@@ -21,8 +21,8 @@
 //   the default: one invocation per (record, tile) item (the record found by binary search over
 //     the first items) visits the tile's texels of the polygon;
 //   PENUMBRA_SBS_COVERAGE_INLINE=1 (SoftLightPass::Compute): workgroups of at most 64 texels of an
-//     item's tile, one invocation per texel, works the texel's block itself, as the per-fragment program does
-//     (light_pass.comp.glsl), counting straight into the work counters; its group counts are 0
+//     item's tile, one invocation per texel, works the texel's block itself, as the per-fragment
+//     program does (light_pass.comp.glsl), counting straight into the work counters; its group counts are 0
 //     unless the deferred pairs and fragments overflowed (the compute twin of the raster pass's
 //     redraw);
 //   PENUMBRA_SBS_COVERAGE_BITS=1: the occupancy bits, one invocation per word, after the lists.

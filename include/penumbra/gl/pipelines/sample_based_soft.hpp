@@ -1051,9 +1051,11 @@ private:
     }
 
     /// A run of the deferred passes over at most `records` records, then its windows (nothing to
-    /// do unless the run overflowed).
-    void workDeferredRun(uint64_t records) {
-        const uint32_t windows = runWindows(records);
+    /// do unless the run overflowed). Windows follow only runs that hold list block 0 (`block0`:
+    /// every listed texel's), not those of later blocks only, which are idle unless lists are long:
+    /// their overflow, if any, is worked inline.
+    void workDeferredRun(uint64_t records, bool block0) {
+        const uint32_t windows = block0 ? runWindows(records) : 0u;
         workDeferredCompute(windows > 0 ? 0u : kNoWindows);
         for (uint32_t k = 0; k < windows; ++k) workDeferredCompute(k + 1);
     }
@@ -1091,14 +1093,7 @@ private:
                 for (uint32_t b0 = 0; b0 < options_.max_list_blocks; b0 += blocks) {
                     const uint32_t run = std::min(blocks, options_.max_list_blocks - b0);
                     if (pending + uint64_t(n) * run > run_pairs) {
-                        // Windows after the runs that hold list block 0 (every listed texel's), not
-                        // after those of later blocks only, which are idle unless lists are long:
-                        // their overflow, if any, is worked inline.
-                        if (pending_block0) {
-                            workDeferredRun(pending);
-                        } else {
-                            workDeferredCompute(kNoWindows);
-                        }
+                        workDeferredRun(pending, pending_block0);
                         pending = 0;
                         pending_block0 = false;
                     }
@@ -1123,11 +1118,7 @@ private:
                 for (uint32_t i = 0; i < caster_count; ++i)
                     if (casters[i].triangles > 0 && casters[i].caster_class == cls) setup(casters[i], culled ? 2 : k);
             }
-            if (pending_block0) {
-                workDeferredRun(pending);
-            } else {
-                workDeferredCompute(kNoWindows);
-            }
+            workDeferredRun(pending, pending_block0);
             pending = 0;
             pending_block0 = false;
         };
