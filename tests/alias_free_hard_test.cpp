@@ -91,15 +91,55 @@ std::vector<uint32_t> runPipeline(penumbra::AliasFreeHardShadows& pipeline, cons
                                   const penumbra::SampleListsLight& light, ViewSamples v) {
     pipeline.reserve(f.samples());
     Status s;
+    const bool compute = pipeline.options().light_pass == penumbra::AfhLightPass::Compute;
+    const std::vector<penumbra::CasterBuffer>& casters = f.gpu->casterBuffers();
+    const uint32_t ranges = static_cast<uint32_t>(casters.size());
+    if (compute) pipeline.validateCasters(casters.data(), ranges);
     if (v == ViewSamples::Exact) {
         pipeline.validate(f.input(), f.samples());
-        s = pipeline.run(f.input(), f.samples(), light, f.drawer());
+        s = compute ? pipeline.run(f.input(), f.samples(), light, casters.data(), ranges)
+                    : pipeline.run(f.input(), f.samples(), light, f.drawer());
     } else {
         pipeline.validate(f.depthInput());
-        s = pipeline.run(f.depthInput(), light, f.drawer());
+        s = compute ? pipeline.run(f.depthInput(), light, casters.data(), ranges) : pipeline.run(f.depthInput(), light, f.drawer());
     }
     REQUIRE(s == Status::Ok);
     return pipeline.stateBuffer().download<uint32_t>(0, f.samples());
+}
+
+/// The shadow bit of every view-sample id after the last run (the light pass's output, read
+/// through the lists: within a list, the scatter's atomics order samples differently per build).
+std::vector<uint8_t> shadowBitsById(const penumbra::AliasFreeHardShadows& pipeline, uint32_t samples) {
+    const penumbra::SampleListsCpu lists = penumbra::downloadSampleLists(pipeline.setup(), pipeline.buffers());
+    const std::vector<uint32_t> words =
+        pipeline.shadowBits().download<uint32_t>(0, penumbra::shadowBitsBytes(std::max<uint32_t>(samples, 1), 1) / 4);
+    std::vector<uint8_t> bits(samples, 0);
+    for (size_t slot = 0; slot < lists.list_ids.size() && slot / 32 < words.size(); ++slot) {
+        const uint32_t id = lists.list_ids[slot];
+        if (id < samples) bits[id] = static_cast<uint8_t>(1u + ((words[slot / 32] >> (slot % 32)) & 1u));
+    }
+    return bits;  // 0 = not listed, 1 = listed and not shadowed, 2 = shadowed
+}
+
+/// AfhLightPass::Compute against the raster light pass of `raster` (its last run): the same
+/// options but the light pass, the same frame; states and shadow bits word for word.
+void checkComputeEqualsRaster(const penumbra::AliasFreeHardShadows& raster, const std::vector<uint32_t>& raster_states,
+                              const Fixture& f, const penumbra::SampleListsLight& light, ViewSamples v) {
+    penumbra::AliasFreeHardOptions o = raster.options();
+    o.light_pass = penumbra::AfhLightPass::Compute;
+    penumbra::AliasFreeHardShadows compute(o);
+    const std::vector<uint32_t> states = runPipeline(compute, f, light, v);
+    size_t differ = 0;
+    for (size_t i = 0; i < states.size(); ++i) differ += states[i] != raster_states[i];
+    const std::vector<uint8_t> bits = shadowBitsById(compute, f.samples()), raster_bits = shadowBitsById(raster, f.samples());
+    size_t bits_differ = 0;
+    for (size_t i = 0; i < bits.size(); ++i) bits_differ += bits[i] != raster_bits[i];
+    const penumbra::AliasFreeHardFrame frame = compute.readFrame();
+    if (differ != 0 || bits_differ != 0) MESSAGE("compute vs raster: ", differ, " states and ", bits_differ, " shadow bits differ");
+    CHECK(differ == 0);
+    CHECK(bits_differ == 0);
+    CHECK(frame.chunks >= 1);
+    CHECK(frame.caster_indices_out_of_range == 0);
 }
 
 penumbra::SampleListsLight pointLight(const Fixture& f, const glm::vec3& position) {
@@ -372,6 +412,8 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                 o.grid_height = height;
                 penumbra::AliasFreeHardShadows pipeline(o);
                 const auto states = runPipeline(pipeline, f, light, v);
+                // The compute light pass: the same states and shadow bits.
+                checkComputeEqualsRaster(pipeline, states, f, light, v);
                 // Exactness: the oracle on the very same float positions the GPU tested (for the
                 // depth input, its own reconstruction read back from the lists).
                 const Comparison c =
@@ -568,6 +610,155 @@ TEST_CASE("long lists: blocks decided on the GPU give identical results; past ma
             CHECK(changed == 0);
         }
     }
+}
+
+TEST_CASE("Compute light pass == raster light pass: precisions, culls, fp64, chunks, list blocks, a directional light") {
+    context();
+    // The every-scene comparison rides on the oracle test above; here the options that change
+    // what the light pass does, on the torus knot (closed) with the columns' ground (open).
+    Fixture f(penumbra::scene::builtin("torus_knot"), 96, 72);
+    const auto light = pointLight(f, f.scene.light.position);
+    uint32_t triangles = 0;
+    for (const penumbra::CasterBuffer& c : f.gpu->casterBuffers()) triangles += c.triangles;
+    for (int config = 0; config < 8; ++config) {
+        CAPTURE(config);
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 96;
+        o.grid_height = 72;
+        o.count_work = true;
+        if (config == 1) o.precision = penumbra::AfhPrecision::Fast;
+        if (config == 2) o.back_faces_only = true;
+        if (config == 3) o.light_facing_only = true;
+        if (config == 4) o.fp64_only = true;
+        if (config == 5) o.compute_triangles = 64;  // many chunks
+        if (config == 6) {                         // several list blocks, all within the bound
+            o.grid_width = o.grid_height = 24;
+            o.list_block = 3;
+            o.max_list_blocks = 64;
+        }
+        if (config == 7) o.skip_shadowed = false;
+        for (ViewSamples v : {ViewSamples::Exact, ViewSamples::Depth}) {
+            const std::string input = viewSamplesName(v);
+            CAPTURE(input);
+            penumbra::AliasFreeHardShadows raster(o);
+            const auto states = runPipeline(raster, f, light, v);
+            checkComputeEqualsRaster(raster, states, f, light, v);
+            // The work the two passes count alike: culled triangles, tests past the skips.
+            penumbra::AliasFreeHardOptions c = o;
+            c.light_pass = penumbra::AfhLightPass::Compute;
+            penumbra::AliasFreeHardShadows compute(c);
+            CHECK(runPipeline(compute, f, light, v) == states);
+            const penumbra::AliasFreeHardFrame rf = raster.readFrame(), cf = compute.readFrame();
+            CHECK(cf.triangles_culled == rf.triangles_culled);
+            CHECK(cf.passes == rf.passes);
+            CHECK(cf.overflow == 0);
+            CHECK(cf.chunks == (config == 5 ? (triangles + 63) / 64 : 1u));
+            CHECK(cf.items > 0);
+            MESSAGE("config ", config, " ", input, ": raster ", rf.fragments, " fragments, ", rf.tests,
+                    " tests; compute ", cf.chunks, " chunks, ", cf.items, " items, ", cf.fragments, " texels, ", cf.tests, " tests");
+        }
+    }
+    // A directional light (columns: its ground plane is one open range).
+    Fixture g(penumbra::scene::builtin("columns"), 128, 128);
+    penumbra::SampleListsLight sun;
+    sun.light = glm::vec4(glm::normalize(glm::vec3(-0.4f, 1.0f, 0.3f)), 0.0f);
+    const auto b = g.scene.bounds();
+    sun.view_projection = penumbra::lightViewProjectionForBounds(sun.light, b.min, b.max);
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = o.grid_height = 128;
+    o.directional_reach = 4.0f * glm::length(b.max - b.min);
+    penumbra::AliasFreeHardShadows raster(o);
+    const auto states = runPipeline(raster, g, sun, ViewSamples::Exact);
+    checkComputeEqualsRaster(raster, states, g, sun, ViewSamples::Exact);
+}
+
+TEST_CASE("Compute light pass: lists past max_list_blocks leave as many UNTESTED as the raster pass, the rest equal") {
+    context();
+    Fixture f(penumbra::scene::builtin("hairball"), 96, 96);
+    const auto light = pointLight(f, f.scene.light.position);
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = o.grid_height = 24;
+    o.list_block = 1;
+    o.max_list_blocks = 64;
+    penumbra::AliasFreeHardShadows raster(o);
+    const auto states = runPipeline(raster, f, light, ViewSamples::Exact);
+    o.light_pass = penumbra::AfhLightPass::Compute;
+    penumbra::AliasFreeHardShadows compute(o);
+    const auto cstates = runPipeline(compute, f, light, ViewSamples::Exact);
+    // Which samples of a list fall past the last block depends on the list order (atomics).
+    size_t raster_untested = 0, compute_untested = 0, both_tested_differ = 0;
+    for (size_t i = 0; i < states.size(); ++i) {
+        const bool ru = states[i] == PENUMBRA_AFH_UNTESTED, cu = cstates[i] == PENUMBRA_AFH_UNTESTED;
+        raster_untested += ru;
+        compute_untested += cu;
+        both_tested_differ += !ru && !cu && states[i] != cstates[i];
+    }
+    MESSAGE("past the list blocks: raster ", raster_untested, ", compute ", compute_untested, " untested; ", both_tested_differ,
+            " tested by both and different");
+    CHECK(raster.readFrame().overflow > 0);
+    CHECK(compute.readFrame().overflow == raster.readFrame().overflow);
+    CHECK(compute_untested == raster_untested);
+    CHECK(both_tested_differ == 0);
+}
+
+TEST_CASE("Compute light pass misuse: options and casters throw or return a Status naming the value; bad indices are counted") {
+    context();
+    penumbra::AliasFreeHardOptions o;
+    o.grid_width = o.grid_height = 32;
+    o.light_pass = penumbra::AfhLightPass::Compute;
+    o.compute_triangles = 63;
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("compute_triangles 63"), penumbra::Error);
+    o.compute_triangles = (1u << 24) + 1;
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("compute_triangles 16777217"), penumbra::Error);
+    o.compute_triangles = 0;
+    o.light_pass = static_cast<penumbra::AfhLightPass>(7);
+    CHECK_THROWS_WITH_AS(penumbra::AliasFreeHardShadows{o}, doctest::Contains("light_pass 7"), penumbra::Error);
+    o.light_pass = penumbra::AfhLightPass::Compute;
+    // The chunk: the default, and the grid's cap on (triangle, tile) items.
+    CHECK(penumbra::afhComputeChunk(o) == penumbra::kAfhDefaultComputeTriangles);
+    o.grid_width = o.grid_height = 4096;
+    CHECK(penumbra::afhComputeChunk(o) == 4096u);  // 2^31 / (512 * 1024 tiles)
+    o.grid_width = o.grid_height = 32;
+
+    Fixture f(penumbra::scene::builtin("columns"), 32, 32);
+    const auto light = pointLight(f, f.scene.light.position);
+    penumbra::AliasFreeHardShadows pipeline(o);
+    pipeline.reserve(f.samples());
+    std::vector<penumbra::CasterBuffer> casters = f.gpu->casterBuffers();
+    const uint32_t n = static_cast<uint32_t>(casters.size());
+    CHECK(pipeline.run(f.input(), f.samples(), light, casters.data(), n) == Status::Ok);
+    penumbra::CasterBuffer bad = casters[0];
+    bad.stride = 10;
+    CHECK_THROWS_WITH_AS(pipeline.validateCasters(&bad, 1), doctest::Contains("stride 10"), penumbra::Error);
+    bad = casters[0];
+    bad.positions.size = 8;
+    CHECK_THROWS_WITH_AS(pipeline.validateCasters(&bad, 1), doctest::Contains("caster range 0 positions"), penumbra::Error);
+#ifdef NDEBUG  // misuse asserts in debug builds
+    bad = casters[0];
+    bad.stride = 10;
+    CHECK(pipeline.run(f.input(), f.samples(), light, &bad, 1) == Status::InvalidArgument);
+    bad = casters[0];
+    bad.positions.size = 8;
+    CHECK(pipeline.run(f.input(), f.samples(), light, &bad, 1) == Status::RangeTooSmall);
+    CHECK(pipeline.run(f.input(), f.samples(), light, nullptr, 1) == Status::InvalidArgument);
+    // The raster overloads refuse a compute pipeline, and the other way round.
+    CHECK(pipeline.run(f.input(), f.samples(), light, f.drawer()) == Status::InvalidArgument);
+    penumbra::AliasFreeHardOptions r = o;
+    r.light_pass = penumbra::AfhLightPass::Raster;
+    penumbra::AliasFreeHardShadows raster(r);
+    raster.reserve(f.samples());
+    CHECK(raster.run(f.input(), f.samples(), light, casters.data(), n) == Status::InvalidArgument);
+    CHECK_THROWS_WITH_AS(raster.validateCasters(casters.data(), n), doctest::Contains("AfhLightPass::Compute"), penumbra::Error);
+#endif
+    // An index past the positions: that triangle casts nothing and is counted.
+    const uint32_t wild[3] = {0u, 1u, 0x7FFFFFFFu};
+    penumbra::gl::Buffer indices(sizeof wild, wild);
+    penumbra::CasterBuffer one = casters[0];
+    one.indices = {indices.id(), 0, sizeof wild};
+    one.triangles = 1;
+    CHECK(pipeline.run(f.input(), f.samples(), light, &one, 1) == Status::Ok);
+    CHECK(pipeline.readFrame().caster_indices_out_of_range == 1);
+    penumbra::gl::checkErrors("compute light pass misuse");
 }
 
 TEST_CASE("far from the origin: camera-relative coordinates give 0 mismatches at 1e3, 1e5 and 1e6") {

@@ -173,6 +173,46 @@ TEST_CASE("AliasFreeHardShadows::run: buffer and depth input, exact and fast; Fi
     }
 }
 
+TEST_CASE("AliasFreeHardShadows::run, compute light pass: the contract, and no draw, query, stencil or framebuffer call") {
+    context();
+    World w;
+    const std::vector<penumbra::CasterBuffer>& casters = w.gpu.casterBuffers();
+    const uint32_t ranges = static_cast<uint32_t>(casters.size());
+    for (const bool depth : {false, true}) {
+        CAPTURE(depth);
+        penumbra::AliasFreeHardOptions o;
+        o.grid_width = 96;
+        o.grid_height = 72;
+        o.light_pass = penumbra::AfhLightPass::Compute;
+        o.compute_triangles = 64;  // several chunks
+        penumbra::AliasFreeHardShadows pipeline(o);
+        pipeline.reserve(w.samples());
+        pipeline.validateCasters(casters.data(), ranges);
+        const auto frame = [&] {
+            return depth ? pipeline.run(w.depthInput(), w.light, casters.data(), ranges)
+                         : pipeline.run(w.bufferInput(), w.samples(), w.light, casters.data(), ranges);
+        };
+        checkContract(record(frame), std::string("run, compute light pass, ") + (depth ? "depth" : "buffer") + " input");
+        GlAudit audit;
+        audit.start();
+        CHECK(frame() == Status::Ok);
+        audit.stop();
+        size_t graphics = 0;
+        for (const std::string& name : audit.names())
+            for (const char* word : {"Draw", "Query", "ConditionalRender", "Stencil", "Framebuffer", "Viewport", "VertexArray"})
+                if (name.find(word) != std::string::npos) {
+                    ++graphics;
+                    MESSAGE("graphics-pipeline call in a compute frame: ", name);
+                }
+        CHECK(!audit.overflowed());
+        CHECK(graphics == 0);
+        CHECK(pipeline.readFrame().chunks > 1);
+        queueEngineError();
+        frame();
+        CHECK(glGetError() == GL_INVALID_ENUM);
+    }
+}
+
 TEST_CASE("LightLutGenerator::generate: seed and certified, one and several dispatches") {
     context();
     const std::vector<glm::dvec3> samples = penumbra::reference::sphereLightSamples(glm::dvec3(0.0), 0.999, 160, 3);

@@ -7,8 +7,10 @@
 #include "penumbra/buffer_range.hpp"
 #include "penumbra/error.hpp"
 #include "penumbra/gl/gl.hpp"
+#include "penumbra/pipelines/caster_class.hpp"
 
 #include <cstdint>
+#include <string>
 
 namespace penumbra::gl {
 
@@ -97,6 +99,26 @@ inline void pointBlocks(GLuint program, const BlockBinding* storage, int count, 
     }
     const GLuint block = glGetUniformBlockIndex(program, uniform_block);
     if (block != GL_INVALID_INDEX) glUniformBlockBinding(program, block, uniform_binding);
+}
+
+/// Load time: `count` caster ranges (CasterBuffer) against their buffers (GL queries; throws
+/// naming `function` and the range): what checkCasterBuffers() checks per frame, plus the
+/// buffers' sizes. Ranges of 0 triangles are skipped.
+inline void validateCasterBuffers(const CasterBuffer* casters, uint32_t count, uint32_t ssbo_alignment, const char* function) {
+    PENUMBRA_CHECK(count == 0 || casters != nullptr, "penumbra::", function, ": ", count, " ranges at a null pointer");
+    for (uint32_t i = 0; i < count; ++i) {
+        const CasterBuffer& c = casters[i];
+        if (c.triangles == 0) continue;
+        PENUMBRA_CHECK(c.stride >= 12 && c.stride % 4 == 0, "penumbra::", function, ": caster range ", i, ": stride ", c.stride,
+                       " must be a multiple of 4, at least 12");
+        PENUMBRA_CHECK(c.triangles <= kMaxCasterTriangles, "penumbra::", function, ": caster range ", i, ": ", c.triangles,
+                       " triangles, at most ", kMaxCasterTriangles);
+        PENUMBRA_CHECK(c.caster_class == CasterClass::Closed || c.caster_class == CasterClass::Open, "penumbra::", function,
+                       ": caster range ", i, ": caster_class ", static_cast<int>(c.caster_class), " is neither Closed nor Open");
+        const std::string what = "caster range " + std::to_string(i);
+        validateRange(c.positions, casterPositionBytes(c), (what + " positions").c_str(), function, ssbo_alignment);
+        if (!c.indices.empty()) validateRange(c.indices, uint64_t(c.triangles) * 12, (what + " indices").c_str(), function, ssbo_alignment);
+    }
 }
 
 }  // namespace penumbra::gl

@@ -64,6 +64,20 @@ static_assert(sizeof(shared::PenumbraAfhSpillWorldHeader) == 16 && sizeof(shared
 
 enum class AfhPrecision { Exact, Fast };
 
+/// How the light pass finds the (caster triangle, light texel) pairs it tests.
+///   Raster:  a draw of your casters per class and list block (DrawCasters callback): vertex,
+///            geometry (the conservative emitter) and fragment stages, an occupancy stencil and
+///            occlusion-query predicates.
+///   Compute: casters as buffers (CasterBuffer, with the caster hook
+///            penumbra/sample_based_soft/caster_buffer.glsl); a setup pass per triangle (the same
+///            culls and the emitter's pixel-expanded box, bit for bit), a scan, and a tiles pass
+///            of one work group per (triangle, 8 x 4 texels of its box): no draw, query, stencil or
+///            framebuffer; no geometry shader is compiled. Same shadow bits and states.
+enum class AfhLightPass { Raster, Compute };
+
+/// The compute light pass's chunk by default: triangles set up between two tiles passes.
+inline constexpr uint32_t kAfhDefaultComputeTriangles = 65536;
+
 /// Value-initialised = defaults, except the grid size, which must be set.
 struct AliasFreeHardOptions {
     uint32_t grid_width = 0, grid_height = 0;  ///< light grid W x H (sintorn2008 uses the view size)
@@ -130,6 +144,16 @@ struct AliasFreeHardOptions {
     /// that needs clipping and finds the buffers full is NOT rasterized — shadows it casts may be
     /// missing; AliasFreeHardFrame::spill_overflow counts such triangles (0 = results exact).
     uint32_t spill_capacity = 0;
+    /// Raster (default) or Compute; see AfhLightPass. The raster-only options (variant's hull,
+    /// clip_to_box, skip_empty_texels, fixed6_two_pass, the spill sizes) do not change what the
+    /// compute pass does.
+    AfhLightPass light_pass = AfhLightPass::Raster;
+    /// Compute light pass: triangles the setup records hold (64 bytes and 4 bytes each, allocated
+    /// at construction; 0 = kAfhDefaultComputeTriangles, in [64, 2^24]). More caster triangles
+    /// than that run in several chunks (each a setup, a scan and a tiles pass;
+    /// AliasFreeHardFrame::chunks): same bits, nothing dropped. The grid also caps a chunk, so that
+    /// its (triangle, tile) items stay below 2^31: afhComputeChunk().
+    uint32_t compute_triangles = 0;
 };
 
 /// A square light grid's side for `samples` view samples: sintorn2008's light grid of the view's
@@ -168,6 +192,10 @@ struct AliasFreeHardFrame {
     /// clipping, afhSpilledTriangles() on the CPU), and of them the ones lost because the spill
     /// buffers were full (not rasterized: shadows may be missing; raise spill_capacity).
     uint64_t spilled = 0, spill_overflow = 0;
+    /// Compute light pass (always counted): chunks the casters took (set on the host), (triangle,
+    /// tile) items the tiles passes ran (each list block reruns them), and caster triangles naming
+    /// a vertex past their CasterBuffer's positions (they cast nothing).
+    uint64_t chunks = 0, items = 0, caster_indices_out_of_range = 0;
 };
 
 /// p - origin computed in double, then rounded once to float: the camera- or light-relative
@@ -288,6 +316,15 @@ inline uint64_t afhSpillWorldBytes(uint32_t capacity) {
     return sizeof(shared::PenumbraAfhSpillWorldHeader) + uint64_t(capacity) * sizeof(shared::PenumbraAfhSpillWorld);
 }
 
+/// The compute light pass's chunk: compute_triangles (or its default), lowered so that the
+/// chunk's (triangle, 8 x 4 tile) items stay below 2^31 when every triangle covers the grid.
+inline uint32_t afhComputeChunk(const AliasFreeHardOptions& o) {
+    const uint64_t wanted = o.compute_triangles != 0 ? o.compute_triangles : kAfhDefaultComputeTriangles;
+    const uint64_t tiles = uint64_t((o.grid_width + PENUMBRA_AFH_TILE_WIDTH - 1) / PENUMBRA_AFH_TILE_WIDTH) *
+                           ((o.grid_height + PENUMBRA_AFH_TILE_HEIGHT - 1) / PENUMBRA_AFH_TILE_HEIGHT);
+    return static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(wanted, (uint64_t(1) << 31) / std::max<uint64_t>(tiles, 1))));
+}
+
 inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const glm::vec4& light) {
     PENUMBRA_CHECK(o.grid_width >= 1 && o.grid_height >= 1 && o.grid_width <= kSampleListsMaxGridSide &&
                        o.grid_height <= kSampleListsMaxGridSide,
@@ -311,6 +348,16 @@ inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const gl
     PENUMBRA_CHECK(o.spill_capacity != 0 || o.max_caster_triangles <= kConservativeMaxSpillCapacity,
                    "penumbra::AliasFreeHardShadows: max_caster_triangles ", o.max_caster_triangles,
                    " would size spill buffers above ", kConservativeMaxSpillCapacity, " triangles; give a smaller spill_capacity");
+    PENUMBRA_CHECK(o.light_pass == AfhLightPass::Raster || o.light_pass == AfhLightPass::Compute,
+                   "penumbra::AliasFreeHardShadows: light_pass ", static_cast<int>(o.light_pass), " is neither Raster nor Compute");
+    PENUMBRA_CHECK(o.compute_triangles == 0 || (o.compute_triangles >= 64 && o.compute_triangles <= (1u << 24)),
+                   "penumbra::AliasFreeHardShadows: compute_triangles ", o.compute_triangles, " is outside [64, 2^24] (0 = ",
+                   kAfhDefaultComputeTriangles, ")");
+    PENUMBRA_CHECK(o.light_pass == AfhLightPass::Raster || o.light_pass == AfhLightPass::Compute,
+                   "penumbra::AliasFreeHardShadows: light_pass ", static_cast<int>(o.light_pass), " is neither Raster nor Compute");
+    PENUMBRA_CHECK(o.compute_triangles == 0 || (o.compute_triangles >= 64 && o.compute_triangles <= (1u << 24)),
+                   "penumbra::AliasFreeHardShadows: compute_triangles ", o.compute_triangles, " is outside [64, 2^24] (0 = ",
+                   kAfhDefaultComputeTriangles, ")");
     PENUMBRA_CHECK(std::isfinite(light.x) && std::isfinite(light.y) && std::isfinite(light.z) &&
                        (light.w == 0.0f || light.w == 1.0f),
                    "penumbra::AliasFreeHardShadows: light must be finite with w = 1 (point) or 0 (directional)");

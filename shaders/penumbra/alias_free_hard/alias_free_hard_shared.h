@@ -41,6 +41,39 @@
 #ifndef PENUMBRA_AFH_SPILL_WORLD_BINDING
 #define PENUMBRA_AFH_SPILL_WORLD_BINDING 7  // PenumbraAfhSpillWorldHeader + PenumbraAfhSpillWorld[]
 #endif
+// Compute light pass (AfhLightPass::Compute): the caster setup reads the casters (CasterBuffer)
+// and writes one record and one tile count per triangle of the chunk; the count array is scanned
+// (inclusive, in place) into each triangle's last item + 1; the tiles pass reads records, scan
+// and lists. Storage bindings above the light pass's, so that none is rebound between passes.
+#ifndef PENUMBRA_AFH_CASTER_POSITIONS_BINDING
+#define PENUMBRA_AFH_CASTER_POSITIONS_BINDING 8  // float[]: CasterBuffer::positions
+#endif
+#ifndef PENUMBRA_AFH_CASTER_INDICES_BINDING
+#define PENUMBRA_AFH_CASTER_INDICES_BINDING 9    // uint[]: CasterBuffer::indices
+#endif
+#ifndef PENUMBRA_AFH_TRIANGLES_BINDING
+#define PENUMBRA_AFH_TRIANGLES_BINDING 10  // uint[PENUMBRA_AFH_TRIANGLE_WORDS * chunk]: per-triangle records
+#endif
+#ifndef PENUMBRA_AFH_ITEMS_BINDING
+#define PENUMBRA_AFH_ITEMS_BINDING 11      // uint[chunk]: tiles per triangle, then their inclusive scan
+#endif
+#ifndef PENUMBRA_AFH_ARGS_BINDING
+#define PENUMBRA_AFH_ARGS_BINDING 12       // uint[PENUMBRA_AFH_ARGS_WORDS]: the tiles pass's dispatch
+#endif
+// The compute light pass's work items: one work group per (triangle, tile of its texel box), a
+// tile PENUMBRA_AFH_TILE_WIDTH x PENUMBRA_AFH_TILE_HEIGHT texels, one invocation per texel.
+#define PENUMBRA_AFH_TILE_WIDTH 8
+#define PENUMBRA_AFH_TILE_HEIGHT 4
+#define PENUMBRA_AFH_SETUP_GROUP 64
+// A triangle record: words 0-8 the world vertices (float bits, as read from the caster hook),
+// 9 = first texel (x | y << 16), 10 = last texel (x | y << 16), 11 = tiles per row of its box,
+// 12-15 the emitter's pixel-expanded box (float bits: xmin, ymin, xmax, ymax).
+#define PENUMBRA_AFH_TRIANGLE_WORDS 16
+// The args buffer: per list block b (< 64) words 4 b .. 4 b + 2 = the x, y, z groups of block b's
+// tiles pass (glDispatchComputeIndirect; 0 groups where no list reaches block b), 4 b + 3 = the
+// chunk's items.
+#define PENUMBRA_AFH_ARGS_WORDS 256
+
 // Resolve bindings.
 #ifndef PENUMBRA_AFH_SLOTS_BINDING
 #define PENUMBRA_AFH_SLOTS_BINDING 5
@@ -78,6 +111,10 @@
 #define PENUMBRA_AFH_WORK_TESTS_SKIPPED 7
 #define PENUMBRA_AFH_WORK_FRAGMENTS_SKIPPED 8
 #define PENUMBRA_AFH_WORK_TRIANGLES_CULLED 9
+// Compute light pass (always counted): caster triangles naming a vertex past their range's
+// positions (they cast nothing), and the (triangle, tile) items the tiles pass ran.
+#define PENUMBRA_AFH_WORK_CASTER_INDICES_OUT_OF_RANGE 10
+#define PENUMBRA_AFH_WORK_ITEMS 11
 #define PENUMBRA_AFH_WORK_WORDS 12
 
 #ifdef __cplusplus

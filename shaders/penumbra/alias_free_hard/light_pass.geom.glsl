@@ -26,7 +26,7 @@
 // penumbra-permutation: PENUMBRA_AFH_EXACT=0 PENUMBRA_CONSERVATIVE_EXACT=0 PENUMBRA_CONSERVATIVE_SPILL_DRAW=1 PENUMBRA_AFH_COUNT_WORK=1
 #include "penumbra/conservative_raster/conservative_raster_shared.h"
 #include "penumbra/alias_free_hard/alias_free_hard_shared.h"
-#include "penumbra/alias_free_hard/degenerate.glsl"
+#include "penumbra/alias_free_hard/cull.glsl"
 
 #ifndef PENUMBRA_AFH_EXACT
 #define PENUMBRA_AFH_EXACT 1
@@ -134,46 +134,16 @@ void main() {
     penumbraAfhTriangle[0] = penumbraAfhWorld[0];
     penumbraAfhTriangle[1] = penumbraAfhWorld[1];
     penumbraAfhTriangle[2] = penumbraAfhWorld[2];
-    // Degenerate casters block nothing (the oracle's rule, shared): culled once per triangle here,
-    // before any spill, rather than per fragment.
-    if (penumbraAfhDegenerate(dvec3(penumbraAfhWorld[0]), dvec3(penumbraAfhWorld[1]), dvec3(penumbraAfhWorld[2]))) return;
-    if ((penumbraAfhParams.grid.w & PENUMBRA_AFH_FLAG_CLOSED) != 0u) {
-        // §3.3: of a closed caster only the light-back-facing triangles cast. Decided in double:
-        // a triangle wrongly culled here would be a missing blocker. Edge-on triangles (facing
-        // exactly 0) block nothing: the oracle's coplanar rule ignores them.
-        dvec3 a = dvec3(penumbraAfhWorld[0]), b = dvec3(penumbraAfhWorld[1]), c = dvec3(penumbraAfhWorld[2]);
-        dvec3 to_light = penumbraAfhParams.light.w != 0.0 ? dvec3(penumbraAfhParams.light.xyz) - a
-                                                           : dvec3(penumbraAfhParams.light.xyz);
-        precise double facing = dot(cross(b - a, c - a), to_light);
-        if (facing >= 0.0) {
+    // The culls (cull.glsl): degenerate triangles, and a closed caster's per `flags`; once per
+    // triangle here, before any spill, rather than per fragment.
+    const int cull = penumbraAfhCull(penumbraAfhWorld[0], penumbraAfhWorld[1], penumbraAfhWorld[2], penumbraAfhParams.light,
+                                     penumbraAfhParams.grid.w);
+    if (cull != PENUMBRA_AFH_CULL_NONE) {
 #if PENUMBRA_AFH_COUNT_WORK
-            if (penumbraAfhParams.pass.x == 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES_CULLED], 1u);
+        if (cull == PENUMBRA_AFH_CULL_CLOSED && penumbraAfhParams.pass.x == 0u)
+            atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES_CULLED], 1u);
 #endif
-            return;
-        }
-    }
-    if ((penumbraAfhParams.grid.w & PENUMBRA_AFH_FLAG_CLOSED_LIGHT_FACING) != 0u) {
-        // light_facing_only: a closed caster's triangle with the light strictly behind its plane
-        // is never the face a blocked segment leaves the solid through: culled (exact). The twin:
-        // detail::afhFacesAway, step for step.
-        dvec3 a = dvec3(penumbraAfhWorld[0]), b = dvec3(penumbraAfhWorld[1]), c = dvec3(penumbraAfhWorld[2]);
-        dvec3 to_light = penumbraAfhParams.light.w != 0.0 ? dvec3(penumbraAfhParams.light.xyz) - a
-                                                           : dvec3(penumbraAfhParams.light.xyz);
-        dvec3 e0 = b - a, e1 = c - a;
-        precise dvec3 n = dvec3(e0.y * e1.z - e0.z * e1.y, e0.z * e1.x - e0.x * e1.z, e0.x * e1.y - e0.y * e1.x);
-        precise double facing = (n.x * to_light.x + n.y * to_light.y) + n.z * to_light.z;
-        precise double e00 = (e0.x * e0.x + e0.y * e0.y) + e0.z * e0.z;
-        precise double e11 = (e1.x * e1.x + e1.y * e1.y) + e1.z * e1.z;
-        precise double nn = (n.x * n.x + n.y * n.y) + n.z * n.z;
-        precise double ll = (to_light.x * to_light.x + to_light.y * to_light.y) + to_light.z * to_light.z;
-        precise double bound = (8.0LF * 1.1102230246251565404e-16LF * sqrt(e00) * sqrt(e11) +
-                                8.0LF * 1.1102230246251565404e-16LF * sqrt(nn)) * sqrt(ll);
-        if (facing < -bound * (1.0LF + 1e-9LF)) {
-#if PENUMBRA_AFH_COUNT_WORK
-            if (penumbraAfhParams.pass.x == 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES_CULLED], 1u);
-#endif
-            return;
-        }
+        return;
     }
     // Direct pass: a triangle that needs clipping goes to penumbraAfhSpill and returns 0 here.
     int emitted = penumbraConservativeEmit(gl_in[0].gl_Position, gl_in[1].gl_Position, gl_in[2].gl_Position,

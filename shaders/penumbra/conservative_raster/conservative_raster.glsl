@@ -31,6 +31,10 @@
 //             (conservative_raster_spill.glsl does that) and draw that buffer with a
 //             PENUMBRA_CONSERVATIVE_DIRECT 0 geometry shader (max_vertices 13) in a second pass.
 //             Both passes together emit exactly what the single pass emits. Needs EXACT 0.
+//             PENUMBRA_CONSERVATIVE_BOX_ONLY 1 = any stage (compute included): no hook, nothing
+//             emitted; penumbraConservativeEmit returns 1 and leaves the pixel-expanded box it
+//             would hand to the hook in penumbraConservativeBoxOut, or returns 0 where the
+//             triangle is dropped (the same bits as the emitting build: steps 1 to 5 below).
 //   predicate: bool penumbraConservativeNeedsSpill(vec4 clip0, vec4 clip1, vec4 clip2, params):
 //             finite, not entirely outside one clipping plane, and not every vertex inside all of
 //             them (the 6-vertex hull covers only unclipped triangles). CPU twin:
@@ -73,8 +77,14 @@
 #include "penumbra/conservative_raster/conservative_raster_shared.h"
 #include "penumbra/conservative_raster/conservative_raster_polygon.glsl"
 
-#ifndef PENUMBRA_CONSERVATIVE_EMIT_VERTEX
+#ifndef PENUMBRA_CONSERVATIVE_BOX_ONLY
+#define PENUMBRA_CONSERVATIVE_BOX_ONLY 0
+#endif
+#if !PENUMBRA_CONSERVATIVE_BOX_ONLY && !defined(PENUMBRA_CONSERVATIVE_EMIT_VERTEX)
 #error penumbra/conservative_raster/conservative_raster.glsl needs the hook PENUMBRA_CONSERVATIVE_EMIT_VERTEX(position, box)
+#endif
+#if PENUMBRA_CONSERVATIVE_BOX_ONLY && PENUMBRA_CONSERVATIVE_DIRECT
+#error PENUMBRA_CONSERVATIVE_BOX_ONLY=1 clips every triangle itself: it is not the Fixed-6 direct pass
 #endif
 #ifndef PENUMBRA_CONSERVATIVE_EXACT
 #define PENUMBRA_CONSERVATIVE_EXACT 0
@@ -96,6 +106,9 @@
 vec2 penumbraConservativePolygon[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
 float penumbraConservativeDepth[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
 vec2 penumbraConservativeHull[PENUMBRA_CONSERVATIVE_MAX_VERTICES];
+#if PENUMBRA_CONSERVATIVE_BOX_ONLY
+vec4 penumbraConservativeBoxOut;  // the last penumbraConservativeEmit's box (when it returned 1)
+#endif
 
 // dot(near_plane, c) in float, left to right, no FMA (the twin computes the same bits).
 float penumbraConservativeNearDistance(vec4 plane, vec4 c) {
@@ -363,6 +376,10 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     hi += vec2(h);
     if (any(greaterThan(lo, size)) || any(lessThan(hi, vec2(0.0)))) return 0;
     vec4 box = vec4(lo + params.viewport.xy, hi + params.viewport.xy);
+#if PENUMBRA_CONSERVATIVE_BOX_ONLY
+    penumbraConservativeBoxOut = box;
+    return 1;
+#else
 
     // 6. The hull.
     int count = -1;
@@ -389,6 +406,7 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     }
     EndPrimitive();
     return count;
+#endif
 }
 
 #endif

@@ -72,6 +72,7 @@
 #include "penumbra/gl/conservative_raster.hpp"
 #include "penumbra/gl/objects.hpp"
 #include "penumbra/gl/sample_lists.hpp"
+#include "penumbra/gl/scan.hpp"
 #include "penumbra/gl/shader.hpp"
 #include "penumbra/gl/validate.hpp"
 #include "penumbra/pipelines/alias_free_hard.hpp"
@@ -79,6 +80,7 @@
 #include <cstddef>
 #include <cstring>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -100,6 +102,11 @@ struct AfhBindings {
     uint32_t states = PENUMBRA_AFH_STATES_BINDING;
     uint32_t spill = PENUMBRA_AFH_SPILL_BINDING;              ///< Fixed-6 two-pass light pass only
     uint32_t spill_world = PENUMBRA_AFH_SPILL_WORLD_BINDING;  ///< Fixed-6 two-pass light pass only
+    uint32_t caster_positions = PENUMBRA_AFH_CASTER_POSITIONS_BINDING;  ///< AfhLightPass::Compute: CasterBuffer::positions
+    uint32_t caster_indices = PENUMBRA_AFH_CASTER_INDICES_BINDING;      ///< AfhLightPass::Compute: CasterBuffer::indices
+    uint32_t triangles = PENUMBRA_AFH_TRIANGLES_BINDING;                ///< AfhLightPass::Compute: setup records
+    uint32_t items = PENUMBRA_AFH_ITEMS_BINDING;                        ///< AfhLightPass::Compute: tiles per record, scanned
+    uint32_t args = PENUMBRA_AFH_ARGS_BINDING;                          ///< AfhLightPass::Compute: the tiles pass's groups
     SampleListsBindings lists{};  ///< the sample-list builder's
 };
 
@@ -129,8 +136,35 @@ public:
             {"PENUMBRA_AFH_WORK_BINDING", b.work}, {"PENUMBRA_AFH_HEADER_BINDING", b.header},
             {"PENUMBRA_AFH_SLOTS_BINDING", b.slots}, {"PENUMBRA_AFH_TEXELS_BINDING", b.texels},
             {"PENUMBRA_AFH_STATES_BINDING", b.states}, {"PENUMBRA_AFH_SPILL_BINDING", b.spill},
-            {"PENUMBRA_AFH_SPILL_WORLD_BINDING", b.spill_world}};
+            {"PENUMBRA_AFH_SPILL_WORLD_BINDING", b.spill_world}, {"PENUMBRA_AFH_CASTER_POSITIONS_BINDING", b.caster_positions},
+            {"PENUMBRA_AFH_CASTER_INDICES_BINDING", b.caster_indices}, {"PENUMBRA_AFH_TRIANGLES_BINDING", b.triangles},
+            {"PENUMBRA_AFH_ITEMS_BINDING", b.items}, {"PENUMBRA_AFH_ARGS_BINDING", b.args}};
         for (const auto& d : binding_defines) defines.push_back({d.first, std::to_string(d.second)});
+        conservative_params_ = gl::Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
+        ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
+        param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(AfhParams), ubo_alignment_) * ubo_alignment_);
+        params_staging_.assign(size_t(param_stride_) * paramSlots(), 0u);
+        afh_params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        work_ = gl::Buffer(PENUMBRA_AFH_WORK_WORDS * 4);
+        lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
+        resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", defines, library);
+        if (options_.light_pass == AfhLightPass::Compute) {
+            buildCompute(defines, library);
+        } else {
+            buildRaster(defines, library);
+        }
+        gl::checkErrors("penumbra::AliasFreeHardShadows");
+    }
+    AliasFreeHardShadows(AliasFreeHardShadows&&) noexcept = default;
+    AliasFreeHardShadows& operator=(AliasFreeHardShadows&&) noexcept = default;
+    AliasFreeHardShadows(const AliasFreeHardShadows&) = delete;
+    AliasFreeHardShadows& operator=(const AliasFreeHardShadows&) = delete;
+
+private:
+    /// AfhLightPass::Raster: the light pass's vertex / geometry / fragment programs, the predicate
+    /// and occupancy programs, the stencil, framebuffer and queries.
+    void buildRaster(ShaderDefines defines, const ShaderLibrary& library) {
+        const AfhBindings& b = bindings_;
         const std::vector<std::string> light_stages = {"penumbra/alias_free_hard/light_pass.vert.glsl",
                                                        "penumbra/alias_free_hard/light_pass.geom.glsl",
                                                        "penumbra/alias_free_hard/light_pass.frag.glsl"};
@@ -163,7 +197,6 @@ public:
         }
         blocks_ = gl::buildProgram({"penumbra/alias_free_hard/blocks.vert.glsl", "penumbra/alias_free_hard/blocks.frag.glsl"},
                                    defines, library);
-        resolve_ = gl::buildComputeProgram("penumbra/alias_free_hard/resolve.comp.glsl", defines, library);
         if (options_.skip_empty_texels) {
             occupancy_ = gl::buildProgram({"penumbra/common/fullscreen.vert.glsl", "penumbra/alias_free_hard/occupancy.frag.glsl"},
                                           defines, library);
@@ -171,13 +204,6 @@ public:
             glNamedRenderbufferStorage(stencil_.id(), GL_STENCIL_INDEX8, static_cast<GLsizei>(options_.grid_width),
                                        static_cast<GLsizei>(options_.grid_height));
         }
-        conservative_params_ = gl::Buffer(sizeof(ConservativeRasterParams), &conservative_.params, GL_DYNAMIC_STORAGE_BIT);
-        ubo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT));
-        param_stride_ = static_cast<uint32_t>(detail::divUp(sizeof(AfhParams), ubo_alignment_) * ubo_alignment_);
-        params_staging_.assign(size_t(param_stride_) * paramSlots(), 0u);
-        afh_params_ = gl::Buffer(params_staging_.size(), nullptr, GL_DYNAMIC_STORAGE_BIT);
-        work_ = gl::Buffer(PENUMBRA_AFH_WORK_WORDS * 4);
-        lists_.frustum = gl::Buffer(sizeof(SampleListsFrustum));
         framebuffer_ = gl::Framebuffer::create();
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, static_cast<GLint>(options_.grid_width));
         glNamedFramebufferParameteri(framebuffer_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, static_cast<GLint>(options_.grid_height));
@@ -191,12 +217,47 @@ public:
         }
         empty_vao_ = gl::VertexArray::create();
         for (uint32_t q = 0; q < options_.max_list_blocks; ++q) block_queries_.push_back(gl::OcclusionQuery::create());
-        gl::checkErrors("penumbra::AliasFreeHardShadows");
     }
-    AliasFreeHardShadows(AliasFreeHardShadows&&) noexcept = default;
-    AliasFreeHardShadows& operator=(AliasFreeHardShadows&&) noexcept = default;
-    AliasFreeHardShadows(const AliasFreeHardShadows&) = delete;
-    AliasFreeHardShadows& operator=(const AliasFreeHardShadows&) = delete;
+
+    /// AfhLightPass::Compute: the setup, args and tiles programs, the chunk's records, scan and
+    /// arguments, and a scanner; nothing of the graphics pipeline.
+    void buildCompute(ShaderDefines defines, const ShaderLibrary& library) {
+        const AfhBindings& b = bindings_;
+        const std::pair<const char*, uint32_t> storage[] = {
+            {"counts", b.counts}, {"offsets", b.offsets}, {"positions", b.positions}, {"shadow", b.shadow}, {"work", b.work},
+            {"caster_positions", b.caster_positions}, {"caster_indices", b.caster_indices}, {"triangles", b.triangles},
+            {"items", b.items}, {"args", b.args}};
+        // The tiles pass binds the first five with triangles and items, the setup the work counters
+        // with the last five: all must be distinct and below the driver's limits (GL's minimum is 8
+        // storage bindings; the defaults reach 12).
+        const GLint max_storage = gl::getInteger(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS);
+        for (size_t i = 0; i < std::size(storage); ++i) {
+            PENUMBRA_CHECK(storage[i].second < static_cast<uint32_t>(std::max<GLint>(max_storage, 0)),
+                           "penumbra::AliasFreeHardShadows: AfhBindings::", storage[i].first, " = ", storage[i].second,
+                           " is not below GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS = ", max_storage);
+            for (size_t j = 0; j < i; ++j)
+                PENUMBRA_CHECK(storage[i].second != storage[j].second, "penumbra::AliasFreeHardShadows: AfhBindings::",
+                               storage[i].first, " and ", storage[j].first, " are both ", storage[i].second,
+                               " (the compute light pass binds them together)");
+        }
+        const GLint compute_blocks = gl::getInteger(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS);
+        PENUMBRA_CHECK(compute_blocks >= 7, "penumbra::AliasFreeHardShadows: the compute light pass's tiles program uses 7 storage "
+                                            "blocks; GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS = ", compute_blocks);
+        setup_program_ = gl::buildComputeProgram("penumbra/alias_free_hard/light_pass_setup.comp.glsl", defines, library);
+        tiles_ = gl::buildComputeProgram("penumbra/alias_free_hard/light_pass_tiles.comp.glsl", defines, library);
+        defines.push_back({"PENUMBRA_AFH_TILES_ARGS", "1"});
+        tiles_args_ = gl::buildComputeProgram("penumbra/alias_free_hard/light_pass_tiles.comp.glsl", defines, library);
+        chunk_ = afhComputeChunk(options_);
+        triangles_ = gl::Buffer(size_t(chunk_) * PENUMBRA_AFH_TRIANGLE_WORDS * 4);
+        items_ = gl::Buffer(size_t(chunk_) * 4);
+        args_ = gl::Buffer(PENUMBRA_AFH_ARGS_WORDS * 4);
+        dummy_ = gl::Buffer(16);
+        scanner_.emplace(ScanOptions{}, library);
+        scanner_->reserve(chunk_);
+        ssbo_alignment_ = static_cast<uint32_t>(gl::getInteger(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT));
+    }
+
+public:
 
     const AliasFreeHardOptions& options() const { return options_; }
 
@@ -232,25 +293,47 @@ public:
     /// states go (uint[sample_count]); empty = states().
     Status run(const SampleBufferInput& input, uint32_t sample_count, const SampleListsLight& light,
                const DrawCasters& draw_casters, const BufferRange& states = {}) {
-        const Status s = begin(sample_count, light, draw_casters, states);
-        if (s != Status::Ok) return s;
-        const Status built = builder_.build(setup_, light, input, buffers(), listOptions(), listBuild());
-        if (built != Status::Ok) return built;
-        lightPassAndResolve(light, draw_casters, states);
-        return Status::Ok;
+        if (options_.light_pass != AfhLightPass::Raster || !draw_casters) return fail(Status::InvalidArgument);
+        return runAny(input, sample_count, light, states, [&] { rasterLightPass(draw_casters); });
     }
 
     /// Every pass for depth input (sample count = view width * height; sample id = y * width + x).
     Status run(const SampleDepthInput& input, const SampleListsLight& light, const DrawCasters& draw_casters,
                const BufferRange& states = {}) {
+        if (options_.light_pass != AfhLightPass::Raster || !draw_casters) return fail(Status::InvalidArgument);
         const uint64_t n = uint64_t(input.view.width) * input.view.height;
         if (n > reserved_) return fail(Status::NotReserved);
-        const Status s = begin(static_cast<uint32_t>(n), light, draw_casters, states);
-        if (s != Status::Ok) return s;
-        const Status built = builder_.build(setup_, light, input, buffers(), listOptions(), listBuild());
-        if (built != Status::Ok) return built;
-        lightPassAndResolve(light, draw_casters, states);
-        return Status::Ok;
+        return runAny(input, static_cast<uint32_t>(n), light, states, [&] { rasterLightPass(draw_casters); });
+    }
+
+    /// AfhLightPass::Compute, buffer input: every pass, the casters as `caster_count` ranges
+    /// (CasterBuffer; ranges of 0 triangles are skipped). Misuse (the Raster light pass, a stride
+    /// below 12 or not a multiple of 4, a range too small for its triangles, a misaligned offset)
+    /// returns a Status and does nothing.
+    Status run(const SampleBufferInput& input, uint32_t sample_count, const SampleListsLight& light, const CasterBuffer* casters,
+               uint32_t caster_count, const BufferRange& states = {}) {
+        const Status c = checkCasters(casters, caster_count);
+        if (c != Status::Ok) return c;
+        return runAny(input, sample_count, light, states, [&] { computeLightPass(casters, caster_count); });
+    }
+
+    /// AfhLightPass::Compute, depth input.
+    Status run(const SampleDepthInput& input, const SampleListsLight& light, const CasterBuffer* casters, uint32_t caster_count,
+               const BufferRange& states = {}) {
+        const Status c = checkCasters(casters, caster_count);
+        if (c != Status::Ok) return c;
+        const uint64_t n = uint64_t(input.view.width) * input.view.height;
+        if (n > reserved_) return fail(Status::NotReserved);
+        return runAny(input, static_cast<uint32_t>(n), light, states, [&] { computeLightPass(casters, caster_count); });
+    }
+
+    /// Load-time check of CasterBuffer ranges against their buffers (GL queries; throws naming the
+    /// range): what run() checks, plus the buffers' sizes.
+    void validateCasters(const CasterBuffer* casters, uint32_t caster_count) const {
+        const char* f = "AliasFreeHardShadows::validateCasters";
+        PENUMBRA_CHECK(options_.light_pass == AfhLightPass::Compute, "penumbra::", f,
+                       ": casters as buffers need options.light_pass = AfhLightPass::Compute");
+        gl::validateCasterBuffers(casters, caster_count, ssbo_alignment_, f);
     }
 
     /// What the last run did: fit, statistics, passes, overflow, work counters (reads back and
@@ -276,6 +359,13 @@ public:
         f.triangles_culled = work[PENUMBRA_AFH_WORK_TRIANGLES_CULLED];
         f.spill_overflow = work[PENUMBRA_AFH_WORK_SPILL_OVERFLOW];
         f.spilled = work[PENUMBRA_AFH_WORK_SPILL_COUNT] / 3u + f.spill_overflow;
+        if (options_.light_pass == AfhLightPass::Compute) {
+            // The compute pass computes every block's box in one setup and never spills.
+            f.spilled = f.spill_overflow = 0;
+            f.chunks = chunks_;
+            f.items = work[PENUMBRA_AFH_WORK_ITEMS];
+            f.caster_indices_out_of_range = work[PENUMBRA_AFH_WORK_CASTER_INDICES_OUT_OF_RANGE];
+        }
         return f;
     }
 
@@ -302,6 +392,11 @@ private:
     SampleListBuilder builder_;
     ConservativeRasterSetup conservative_;
     gl::Program light_pass_, spill_pass_, blocks_, resolve_, occupancy_;
+    // AfhLightPass::Compute: programs, the chunk's records, tile counts (scanned) and arguments.
+    gl::Program setup_program_, tiles_, tiles_args_;
+    gl::Buffer triangles_, items_, args_, dummy_;
+    std::optional<Scanner> scanner_;  // compute only: a Scanner compiles its kernels when constructed
+    uint32_t chunk_ = 0, chunks_ = 0, ssbo_alignment_ = 256;
     gl::Renderbuffer stencil_;  // skip_empty_texels: W x H, non-empty list blocks per texel
     gl::Buffer conservative_params_, afh_params_, work_;
     gl::Buffer spill_, spill_world_;  // two-pass only: spill header + triangles, spill-world header + vertices
@@ -339,10 +434,30 @@ private:
         return b;
     }
 
-    Status begin(uint32_t sample_count, const SampleListsLight& light, const DrawCasters& draw_casters,
-                 const BufferRange& states) {
+    /// The per-frame check of the caster ranges (no GL call).
+    Status checkCasters(const CasterBuffer* casters, uint32_t count) const {
+        if (options_.light_pass != AfhLightPass::Compute) return fail(Status::InvalidArgument);
+        const Status s = checkCasterBuffers(casters, count, ssbo_alignment_);
+        return s == Status::Ok ? s : fail(s);
+    }
+
+    /// run() for either input and either light pass: checks, lists, `light_pass()`, resolve.
+    template <class Input, class LightPass>
+    Status runAny(const Input& input, uint32_t sample_count, const SampleListsLight& light, const BufferRange& states,
+                  const LightPass& light_pass) {
+        const Status s = begin(sample_count, light, states);
+        if (s != Status::Ok) return s;
+        const Status built = builder_.build(setup_, light, input, buffers(), listOptions(), listBuild());
+        if (built != Status::Ok) return built;
+        beginLightPass(light.light);
+        light_pass();
+        resolve(states);
+        return Status::Ok;
+    }
+
+    Status begin(uint32_t sample_count, const SampleListsLight& light, const BufferRange& states) {
         if (reserved_ == 0 || sample_count > reserved_) return fail(Status::NotReserved);
-        if (!draw_casters || !afhLightValid(light.light)) return fail(Status::InvalidArgument);
+        if (!afhLightValid(light.light)) return fail(Status::InvalidArgument);
         if (light.light.w == 0.0f && !(options_.directional_reach > 0.0f)) return fail(Status::InvalidArgument);
         if (!states.empty() && !states.holds(uint64_t(sample_count) * 4)) return fail(Status::RangeTooSmall);
         // sample_count <= reserved_, which reserve() validated: sampleListsSetup cannot throw here.
@@ -373,14 +488,93 @@ private:
                       static_cast<GLintptr>(size_t(slot) * param_stride_), sizeof(AfhParams));
     }
 
-    void lightPassAndResolve(const SampleListsLight& light, const DrawCasters& draw_casters, const BufferRange& states) {
-        writeParams(light.light);
+    /// Parameters, cleared shadow bits and work counters.
+    void beginLightPass(const glm::vec4& light) {
+        writeParams(light);
         const uint32_t zero = 0;
         const uint64_t shadow_bytes = std::max<uint64_t>(shadowBitsBytes(std::max<uint32_t>(setup_.sample_count, 1), 1), 4);
         glClearNamedBufferSubData(shadow_.id(), GL_R32UI, 0, static_cast<GLsizeiptr>(shadow_bytes), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &zero);
         glClearNamedBufferSubData(work_.id(), GL_R32UI, 0, PENUMBRA_AFH_WORK_WORDS * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+
+    /// AfhLightPass::Compute: per chunk of caster triangles (both classes; the class picks the
+    /// setup's parameter slot, whose flags carry the closed casters' cull), the setup of every
+    /// range piece in the chunk, the inclusive scan of their tile counts, the args program, then
+    /// per list block one indirect tiles pass (0 groups past the longest list).
+    void computeLightPass(const CasterBuffer* casters, uint32_t caster_count) {
+        chunks_ = 0;
+        const GLuint setup_id = setup_program_.id();
+        uint32_t filled = 0;  // records of the chunk being set up
+        const auto flush = [&] {
+            if (filled == 0) return;
+            ++chunks_;
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            const BufferRange items{items_.id(), 0, uint64_t(filled) * 4};
+            scanner_->inclusive(items, items, filled);  // reserved for the chunk: cannot fail
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.items, items_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.args, args_.id());
+            gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.header, lists_.header.id(), 0, sizeof(SampleListsHeader));
+            tiles_args_.use();
+            glProgramUniform1ui(tiles_args_.id(), 0, filled);
+            glProgramUniform2ui(tiles_args_.id(), 1, options_.list_block, options_.max_list_blocks);
+            glDispatchCompute(1, 1, 1);
+            glMemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+            tiles_.use();
+            glProgramUniform1ui(tiles_.id(), 0, filled);
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.shadow, shadow_.id());
+            gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
+            glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, args_.id());
+            for (uint32_t b = 0; b < options_.max_list_blocks; ++b) {
+                bindParams(1 + 2 * b + 1);  // pass.x = b
+                glDispatchComputeIndirect(static_cast<GLintptr>(size_t(b) * 16));
+            }
+            // The next chunk's setup rewrites the records and counts the tiles passes read.
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            filled = 0;
+        };
+        for (uint32_t c = 0; c < 2; ++c) {
+            const CasterClass cls = c == 0 ? CasterClass::Closed : CasterClass::Open;
+            for (uint32_t i = 0; i < caster_count; ++i) {
+                const CasterBuffer& range = casters[i];
+                if (range.triangles == 0 || range.caster_class != cls) continue;
+                for (uint32_t first = 0; first < range.triangles;) {
+                    if (filled == chunk_) flush();
+                    const uint32_t n = std::min(chunk_ - filled, range.triangles - first);
+                    setup_program_.use();
+                    // Every binding again: the scanner of the previous chunk rebinds some.
+                    bindParams(1 + c);  // block 0, this class's flags
+                    gl::bindBase(GL_UNIFORM_BUFFER, PENUMBRA_CONSERVATIVE_PARAMS_BINDING, conservative_params_.id());
+                    gl::bindRange(GL_UNIFORM_BUFFER, bindings_.frustum, lists_.frustum.id(), 0, sizeof(SampleListsFrustum));
+                    gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.caster_positions, range.positions);
+                    if (range.indices.empty()) {
+                        gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.caster_indices, dummy_.id());
+                    } else {
+                        gl::bindRange(GL_SHADER_STORAGE_BUFFER, bindings_.caster_indices, range.indices);
+                    }
+                    gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.triangles, triangles_.id());
+                    gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.items, items_.id());
+                    gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.work, work_.id());
+                    glProgramUniform4ui(setup_id, 0, first, n, range.stride / 4, range.indices.empty() ? 0u : 1u);
+                    glProgramUniform1ui(setup_id, 1, static_cast<GLuint>(std::min<uint64_t>(range.positions.size / 4, 0xFFFFFFFFu)));
+                    glProgramUniform1ui(setup_id, 2, filled);
+                    glDispatchCompute(static_cast<GLuint>(detail::divUp(n, PENUMBRA_AFH_SETUP_GROUP)), 1, 1);
+                    filled += n;
+                    first += n;
+                }
+            }
+        }
+        flush();
+    }
+
+    /// AfhLightPass::Raster: predicates, occupancy stencil, the casters drawn per list block.
+    void rasterLightPass(const DrawCasters& draw_casters) {
         glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer_.id());
         glViewport(0, 0, static_cast<GLsizei>(options_.grid_width), static_cast<GLsizei>(options_.grid_height));
         glDisable(GL_DEPTH_TEST);
@@ -454,7 +648,10 @@ private:
             }
         }
         glDisable(GL_STENCIL_TEST);
-        // (5) Resolve.
+    }
+
+    /// (5) Resolve.
+    void resolve(const BufferRange& states) {
         resolve_.use();
         bindParams(0);
         gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.slots, lists_.slots.id());

@@ -571,18 +571,7 @@ public:
         const char* f = "SampleBasedSoftShadows::validateCasters";
         PENUMBRA_CHECK(options_.light_pass == SoftLightPass::Compute, "penumbra::", f,
                        ": casters as buffers need options.light_pass = SoftLightPass::Compute");
-        PENUMBRA_CHECK(caster_count == 0 || casters != nullptr, "penumbra::", f, ": ", caster_count, " ranges at a null pointer");
-        for (uint32_t i = 0; i < caster_count; ++i) {
-            const CasterBuffer& c = casters[i];
-            if (c.triangles == 0) continue;
-            PENUMBRA_CHECK(c.stride >= 12 && c.stride % 4 == 0, "penumbra::", f, ": caster range ", i, ": stride ", c.stride,
-                           " must be a multiple of 4, at least 12");
-            PENUMBRA_CHECK(c.triangles <= kMaxCasterTriangles, "penumbra::", f, ": caster range ", i, ": ", c.triangles,
-                           " triangles, at most ", kMaxCasterTriangles);
-            const std::string what = "caster range " + std::to_string(i);
-            gl::validateRange(c.positions, casterPositionBytes(c), (what + " positions").c_str(), f, ssbo_alignment_);
-            if (!c.indices.empty()) gl::validateRange(c.indices, uint64_t(c.triangles) * 12, (what + " indices").c_str(), f, ssbo_alignment_);
-        }
+        gl::validateCasterBuffers(casters, caster_count, ssbo_alignment_, f);
     }
 
     /// What the last run did (reads back and waits: tools, tests, benchmarks).
@@ -828,29 +817,11 @@ private:
         return Status::Ok;
     }
 
-    /// Triangles per CasterBuffer at most (3 corners each stay below 2^32).
-    static constexpr uint32_t kMaxCasterTriangles = 1u << 30;
-
-    /// Bytes `c`'s positions must hold: one vertex without indices, 3 per triangle without.
-    static uint64_t casterPositionBytes(const CasterBuffer& c) {
-        return c.indices.empty() ? (3 * uint64_t(c.triangles) - 1) * c.stride + 12 : 12;
-    }
-
     /// run()'s per-frame check of the caster ranges (no GL call).
     Status checkCasters(const CasterBuffer* casters, uint32_t count) const {
-        if (options_.light_pass != SoftLightPass::Compute || (count > 0 && casters == nullptr)) return fail(Status::InvalidArgument);
-        for (uint32_t i = 0; i < count; ++i) {
-            const CasterBuffer& c = casters[i];
-            if (c.triangles == 0) continue;
-            if (c.stride < 12 || c.stride % 4 != 0 || c.triangles > kMaxCasterTriangles ||
-                (c.caster_class != CasterClass::Closed && c.caster_class != CasterClass::Open))
-                return fail(Status::InvalidArgument);
-            if (!c.positions.holds(casterPositionBytes(c)) || (!c.indices.empty() && !c.indices.holds(uint64_t(c.triangles) * 12)))
-                return fail(Status::RangeTooSmall);
-            if (c.positions.offset % ssbo_alignment_ != 0 || (!c.indices.empty() && c.indices.offset % ssbo_alignment_ != 0))
-                return fail(Status::Misaligned);
-        }
-        return Status::Ok;
+        if (options_.light_pass != SoftLightPass::Compute) return fail(Status::InvalidArgument);
+        const Status s = checkCasterBuffers(casters, count, ssbo_alignment_);
+        return s == Status::Ok ? s : fail(s);
     }
 
     SampleListsOptions listOptions() const {

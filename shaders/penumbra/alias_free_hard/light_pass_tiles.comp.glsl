@@ -1,0 +1,150 @@
+// penumbra — alias-free hard shadows, the compute light pass's tiles pass (AfhLightPass::Compute):
+// what the raster light pass's fragment stage (light_pass.frag.glsl) does, for the texels of one
+// tile of one triangle's box. Work group = one (triangle, tile) item of the chunk, invocation =
+// one texel of the tile: it applies the fragment stage's box test (the emitter's pixel-expanded
+// box, conservative_raster_clip.glsl) to the texel's centre, walks list block b (params pass.x)
+// of the texel's list and sets the shadow bit of every sample the triangle blocks — the same
+// blocker test on the same bits. The box holds every texel the emitter's hull covers, so every
+// texel a raster fragment would shade is visited: same shadow bits (a texel only the box holds
+// tests samples the triangle cannot block).
+// The items of a chunk: the setup pass's tile counts, scanned inclusively in place (the scanner),
+// so item i belongs to the first triangle whose scan exceeds i (a binary search).
+// PENUMBRA_AFH_TILES_ARGS=1 builds the one-invocation args program instead: it writes each list
+// block's group counts (0 past the longest list, the raster pass's predicates) from the scan's
+// last entry and the lists' header.
+// penumbra-permutation: PENUMBRA_AFH_TILES_ARGS=1
+// penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_AFH_COUNT_WORK=1
+// penumbra-permutation: PENUMBRA_AFH_EXACT=1 PENUMBRA_AFH_FILTERED=0 PENUMBRA_AFH_SKIP_SHADOWED=0
+// penumbra-permutation: PENUMBRA_AFH_EXACT=0 PENUMBRA_AFH_COUNT_WORK=0
+#include "penumbra/common/common_shared.h"
+#include "penumbra/sample_lists/sample_lists_shared.h"
+#include "penumbra/alias_free_hard/alias_free_hard_shared.h"
+
+#ifndef PENUMBRA_AFH_TILES_ARGS
+#define PENUMBRA_AFH_TILES_ARGS 0
+#endif
+#ifndef PENUMBRA_AFH_COUNT_WORK
+#define PENUMBRA_AFH_COUNT_WORK 0
+#endif
+#ifndef PENUMBRA_AFH_SKIP_SHADOWED
+#define PENUMBRA_AFH_SKIP_SHADOWED 1
+#endif
+
+layout(std430, binding = PENUMBRA_AFH_ITEMS_BINDING) readonly buffer PenumbraAfhItems { uint penumbraAfhItems[]; };
+layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uint penumbraAfhWork[]; };
+layout(location = 0) uniform uint penumbraAfhChunkTriangles;  // records in this chunk
+
+#if PENUMBRA_AFH_TILES_ARGS
+layout(local_size_x = 1) in;
+layout(std430, binding = PENUMBRA_AFH_HEADER_BINDING) readonly buffer PenumbraAfhHeaderBlock {
+    PenumbraSampleListsHeader penumbraAfhHeader;
+};
+layout(std430, binding = PENUMBRA_AFH_ARGS_BINDING) writeonly buffer PenumbraAfhArgs { uint penumbraAfhArgs[]; };
+layout(location = 1) uniform uvec2 penumbraAfhBlocks;  // x = list block size, y = list blocks the pass may walk
+
+void main() {
+    const uint n = penumbraAfhChunkTriangles;
+    const uint items = n > 0u ? penumbraAfhItems[n - 1u] : 0u;
+    const uint length = penumbraAfhHeader.max_list_length, size = penumbraAfhBlocks.x;
+    const uint needed = length / size + ((length % size) != 0u ? 1u : 0u);
+    // 1D item counts folded into (x, y) with x <= PENUMBRA_MAX_GROUPS_PER_DIMENSION
+    // (penumbra::detail::foldDispatch; the last row's extra groups find no item).
+    const uint x = min(items, uint(PENUMBRA_MAX_GROUPS_PER_DIMENSION));
+    const uint y = x > 0u ? (items + x - 1u) / x : 0u;
+    for (uint b = 0u; b < penumbraAfhBlocks.y; ++b) {
+        const bool run = b < needed && items > 0u;
+        penumbraAfhArgs[4u * b] = run ? x : 0u;
+        penumbraAfhArgs[4u * b + 1u] = run ? y : 0u;
+        penumbraAfhArgs[4u * b + 2u] = run ? 1u : 0u;
+        penumbraAfhArgs[4u * b + 3u] = items;
+    }
+    atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_ITEMS], items);
+}
+#else
+layout(local_size_x = PENUMBRA_AFH_TILE_WIDTH, local_size_y = PENUMBRA_AFH_TILE_HEIGHT) in;
+
+layout(std140, binding = PENUMBRA_AFH_PARAMS_BINDING) uniform PenumbraAfhParamsBlock {
+    PenumbraAfhParams penumbraAfhParams;
+};
+layout(std430, binding = PENUMBRA_AFH_COUNTS_BINDING) readonly buffer PenumbraAfhCounts { uint penumbraAfhCounts[]; };
+layout(std430, binding = PENUMBRA_AFH_OFFSETS_BINDING) readonly buffer PenumbraAfhOffsets { uint penumbraAfhOffsets[]; };
+layout(std430, binding = PENUMBRA_AFH_POSITIONS_BINDING) readonly buffer PenumbraAfhPositions { vec4 penumbraAfhPositions[]; };
+layout(std430, binding = PENUMBRA_AFH_SHADOW_BINDING) coherent buffer PenumbraAfhShadow { uint penumbraAfhShadow[]; };
+layout(std430, binding = PENUMBRA_AFH_TRIANGLES_BINDING) readonly buffer PenumbraAfhTriangles { uint penumbraAfhTriangles[]; };
+
+#define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraAfhCounts[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_OFFSET(list) penumbraAfhOffsets[list]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_POSITION(slot) penumbraAfhPositions[slot]
+#define PENUMBRA_SAMPLE_LISTS_LOAD_ID(slot) 0u
+#define PENUMBRA_SAMPLE_LISTS_GRID_WIDTH penumbraAfhParams.grid.x
+#define PENUMBRA_SAMPLE_LISTS_SHADOW_BITS 1
+#define PENUMBRA_SAMPLE_LISTS_SHADOW_OR(word, mask) atomicOr(penumbraAfhShadow[word], mask)
+#define PENUMBRA_SAMPLE_LISTS_LOAD_SHADOW(word) penumbraAfhShadow[word]
+#include "penumbra/sample_lists/sample_lists.glsl"
+#include "penumbra/sample_lists/shadow_bits.glsl"
+#include "penumbra/conservative_raster/conservative_raster_clip.glsl"
+#include "penumbra/alias_free_hard/blocker_test.glsl"
+#include "penumbra/common/dispatch.glsl"
+
+shared uint penumbraAfhItemTriangle;
+
+void main() {
+    const uint item = penumbraLinearGroup();
+    const uint n = penumbraAfhChunkTriangles;
+    if (gl_LocalInvocationIndex == 0u) {
+        // The first record whose inclusive scan exceeds the item (records of 0 tiles are skipped:
+        // their scan equals the previous one).
+        uint lo = 0u, hi = n;
+        while (lo < hi) {
+            const uint mid = (lo + hi) / 2u;
+            if (penumbraAfhItems[mid] > item) hi = mid;
+            else lo = mid + 1u;
+        }
+        penumbraAfhItemTriangle = lo;
+    }
+    barrier();
+    const uint t = penumbraAfhItemTriangle;
+    if (t >= n) return;  // the last row's extra groups
+    const uint base = t * uint(PENUMBRA_AFH_TRIANGLE_WORDS);
+    const uint k = item - (t > 0u ? penumbraAfhItems[t - 1u] : 0u);
+    const uint tiles_x = penumbraAfhTriangles[base + 11u];
+    const uint first = penumbraAfhTriangles[base + 9u], last = penumbraAfhTriangles[base + 10u];
+    const ivec2 texel = ivec2(first & 0xFFFFu, first >> 16) +
+                        ivec2(k % tiles_x, k / tiles_x) * ivec2(PENUMBRA_AFH_TILE_WIDTH, PENUMBRA_AFH_TILE_HEIGHT) +
+                        ivec2(gl_LocalInvocationID.xy);
+    if (texel.x > int(last & 0xFFFFu) || texel.y > int(last >> 16)) return;
+    const vec4 box = uintBitsToFloat(uvec4(penumbraAfhTriangles[base + 12u], penumbraAfhTriangles[base + 13u],
+                                           penumbraAfhTriangles[base + 14u], penumbraAfhTriangles[base + 15u]));
+    // The fragment stage's test, at the centre gl_FragCoord would have.
+    if (!penumbraConservativeInsideBox(vec2(texel) + 0.5, box)) return;
+    const vec3 v0 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base], penumbraAfhTriangles[base + 1u], penumbraAfhTriangles[base + 2u]));
+    const vec3 v1 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base + 3u], penumbraAfhTriangles[base + 4u], penumbraAfhTriangles[base + 5u]));
+    const vec3 v2 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base + 6u], penumbraAfhTriangles[base + 7u], penumbraAfhTriangles[base + 8u]));
+    const uvec2 range = penumbraSampleListsBlock(texel, penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
+    if (range.y == 0u) return;
+    const float reach = penumbraAfhParams.tolerance.z;
+    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
+    const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
+    const double scene_extent = penumbraAfhParams.exact.y;
+    uint tests = 0u, fallbacks = 0u, skipped = 0u;
+    for (uint slot = range.x; slot < range.x + range.y; ++slot) {
+#if PENUMBRA_AFH_SKIP_SHADOWED
+        if (penumbraSampleListsShadowBit(slot, 0u)) {
+            ++skipped;
+            continue;
+        }
+#endif
+        ++tests;
+        if (penumbraAfhBlocksLightCounted(v0, v1, v2, penumbraSampleListsPosition(slot), penumbraAfhParams.light, reach, eps,
+                                          offset, scene_extent, fallbacks)) {
+            penumbraSampleListsSetShadowBit(slot, 0u);
+        }
+    }
+#if PENUMBRA_AFH_COUNT_WORK
+    atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], 1u);
+    atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS], tests);
+    if (fallbacks > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FALLBACKS], fallbacks);
+    if (skipped > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS_SKIPPED], skipped);
+#endif
+}
+#endif
