@@ -919,6 +919,64 @@ TEST_CASE("cpu: the twin's hull covers every required pixel; fixed6 contains exa
     }
 }
 
+namespace {
+
+/// The compute light passes' coverage (penumbraConservativeEmit with PENUMBRA_CONSERVATIVE_BOX_ONLY,
+/// then penumbraConservativeBoxPixels and the box test per pixel centre), through the CPU twin:
+/// every pixel the exact predicate requires is visited. Returns the pixels visited.
+uint64_t checkBoxPixels(const ConservativeRasterSetup& setup, const TestTriangle& t, uint64_t& missed) {
+    const glm::ivec4 viewport(setup.options.viewport_x, setup.options.viewport_y, setup.width(), setup.height());
+    const auto hull = penumbra::conservativeHull(t.v, setup);
+    const auto required = penumbra::conservativeRequiredPixels(t.v[0], t.v[1], t.v[2], setup);
+    if (hull.count == 0) {
+        missed += required.size();  // a dropped triangle touches no pixel
+        return 0;
+    }
+    const glm::ivec4 range = penumbra::conservativeBoxPixels(hull.box, viewport);
+    auto visited = [&](glm::ivec2 p) {  // window pixel
+        const glm::vec2 centre = glm::vec2(p) + 0.5f;
+        return p.x >= range.x && p.y >= range.y && p.x <= range.z && p.y <= range.w && centre.x >= hull.box.x &&
+               centre.y >= hull.box.y && centre.x <= hull.box.z && centre.y <= hull.box.w;
+    };
+    for (const auto& p : required) {
+        if (!visited(p + glm::ivec2(viewport))) {
+            ++missed;
+            CAPTURE(describeClip(t.v));
+            CAPTURE(p.x);
+            CAPTURE(p.y);
+            CHECK(visited(p + glm::ivec2(viewport)));
+        }
+    }
+    uint64_t count = 0;
+    for (int y = range.y; y <= range.w; ++y)
+        for (int x = range.x; x <= range.z; ++x) count += visited(glm::ivec2(x, y));
+    return count;
+}
+
+void boxPixelsSweep(uint32_t seed, int count) {
+    for (glm::ivec4 viewport : {glm::ivec4(0, 0, 32, 32), glm::ivec4(7, -3, 20, 29), glm::ivec4(0, 0, 1, 1)}) {
+        for (const auto variant : {ConservativeVariant::Fixed6, ConservativeVariant::Exact}) {
+            const auto setup = makeSetup(viewport.x, viewport.y, viewport.z, viewport.w, variant, 16);
+            TriangleGenerator gen(seed, viewport.z, viewport.w);
+            uint64_t missed = 0, visited = 0, required = 0;
+            for (int i = 0; i < count; ++i) {
+                const TestTriangle t = gen.next();
+                visited += checkBoxPixels(setup, t, missed);
+                required += penumbra::conservativeRequiredPixels(t.v[0], t.v[1], t.v[2], setup).size();
+            }
+            MESSAGE("box pixels, ", viewport.z, "x", viewport.w, " variant ", int(variant), ": ", count, " triangles, ", required,
+                    " required pixels, ", visited, " visited, ", missed, " missed");
+            CHECK(missed == 0);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("cpu: the box's pixel range (the compute light passes' coverage) holds every required pixel, 10^5 triangles") {
+    boxPixelsSweep(testSeed(), int(defaultCount(100000) / 6 + 1));
+}
+
 TEST_CASE("cpu: NaN/Inf drop, degenerate triangles cover what they touch, drop_degenerate drops them") {
     const auto setup = makeSetup(0, 0, 16, 16, ConservativeVariant::Fixed6, 8);
     const auto drop = makeSetup(0, 0, 16, 16, ConservativeVariant::Exact, 8, true);
@@ -1470,6 +1528,10 @@ TEST_SUITE("stress") {
             MESSAGE(stats.summary(penumbra::conservativeVariantName(variant), seed), "\n  (", seconds(start), " s)");
             requireClean(stats);
         }
+    }
+
+    TEST_CASE("stress: the box's pixel range holds every required pixel, 10^6 triangles") {
+        boxPixelsSweep(testSeed(), int(defaultCount(1000000) / 6 + 1));
     }
 
     TEST_CASE("stress: 2 * 10^5 triangles per variant in a 16384^2 viewport and at 1e5 world units") {

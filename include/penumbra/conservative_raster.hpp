@@ -741,6 +741,18 @@ inline HullRaster rasterizeConservativeHull(const ConservativeHull& hull, const 
                              setup.options.clip_to_box ? &box : nullptr, tolerance);
 }
 
+/// CPU twin of penumbraConservativeBoxPixels (conservative_raster_clip.glsl): the window pixels
+/// (x0, y0) .. (x1, y1), inclusive, of `viewport` (x, y, width, height) whose centres the hull's
+/// box may hold, one more on each side, clipped to the viewport (x1 < x0 or y1 < y0: none). The
+/// compute light passes visit these and keep those whose centre passes the box test. `box` is a
+/// hull's that was not dropped (within the guard band).
+inline glm::ivec4 conservativeBoxPixels(const glm::vec4& box, const glm::ivec4& viewport) {
+    const glm::ivec2 lo = glm::max(glm::ivec2(std::floor(box.x), std::floor(box.y)) - 1, glm::ivec2(viewport.x, viewport.y));
+    const glm::ivec2 hi = glm::min(glm::ivec2(std::floor(box.z), std::floor(box.w)) + 1,
+                                   glm::ivec2(viewport.x + viewport.z - 1, viewport.y + viewport.w - 1));
+    return glm::ivec4(lo, hi);
+}
+
 /// Ground truth, part 1: the triangle clipped to the near plane and w >= min_w (and, to keep the
 /// numbers small, to a guard band 2^20 pixels around the viewport — far enough never to change a
 /// viewport pixel), projected to viewport-relative pixels, in double. Empty for NaN/Inf input or

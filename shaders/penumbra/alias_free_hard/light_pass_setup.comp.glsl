@@ -43,6 +43,7 @@ layout(std430, binding = PENUMBRA_AFH_ITEMS_BINDING) writeonly buffer PenumbraAf
 #define PENUMBRA_SBS_CASTER_INDICES_BINDING PENUMBRA_AFH_CASTER_INDICES_BINDING
 #include "penumbra/sample_based_soft/caster_buffer.glsl"
 #include "penumbra/conservative_raster/conservative_raster.glsl"
+#include "penumbra/conservative_raster/conservative_raster_clip.glsl"
 
 layout(location = 2) uniform uint penumbraAfhChunkBase;  // this dispatch's first record in the chunk
 
@@ -68,12 +69,9 @@ void main() {
     if (penumbraConservativeEmit(m * vec4(v[0], 1.0), m * vec4(v[1], 1.0), m * vec4(v[2], 1.0), penumbraConservativeParams) == 0)
         return;
     const vec4 box = penumbraConservativeBoxOut;
-    // Texels whose centre (i + 0.5, j + 0.5) the box may hold, one more on each side (the tiles
-    // pass applies the fragment stage's exact box test), clipped to the grid. The box lies within
-    // the guard band: its coordinates convert to int.
-    const ivec2 size = ivec2(penumbraAfhParams.grid.xy);
-    const ivec2 lo = max(ivec2(floor(box.xy)) - 1, ivec2(0));
-    const ivec2 hi = min(ivec2(floor(box.zw)) + 1, size - 1);
+    // Texels whose centre the box may hold (the tiles pass applies the fragment stage's box test).
+    const ivec4 texels = penumbraConservativeBoxPixels(box, ivec4(0, 0, ivec2(penumbraAfhParams.grid.xy)));
+    const ivec2 lo = texels.xy, hi = texels.zw;
     if (any(lessThan(hi, lo))) return;
     const uvec2 tiles = (uvec2(hi - lo) + uvec2(PENUMBRA_AFH_TILE_WIDTH, PENUMBRA_AFH_TILE_HEIGHT)) /
                         uvec2(PENUMBRA_AFH_TILE_WIDTH, PENUMBRA_AFH_TILE_HEIGHT);
