@@ -26,6 +26,11 @@
 //               cast only light-back-facing triangles); back_faces_over_all = its time / hard's,
 //               err_mismatch_back_faces its disagreement with the oracle on T.
 //   fast        the same with AfhPrecision::Fast (float planes, no offset).
+//   hard_compute  the hard method with AfhLightPass::Compute (casters as CasterBuffer ranges: setup,
+//               scan, tiles passes; no draw): raster_over_compute = ms_hard / ms_hard_compute (> 1:
+//               compute is faster), same_bits_compute (1 = the same states), err_mismatch_compute,
+//               and its work (untimed count_work run): compute_items, compute_texels,
+//               compute_chunks, compute_tests_per_sample.
 //   map<res>    a res^2 GL_DEPTH_COMPONENT32F map rendered from the pipeline's fitted light matrix
 //               (the tightest frustum a shadow map could get), every mesh, no culling,
 //               GL_DEPTH_CLAMP, glPolygonOffset(2, 4) (slope factor 2, 4 units: a typical
@@ -401,6 +406,15 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         penumbra::AliasFreeHardShadows fast = makePipeline(penumbra::AfhPrecision::Fast, false);
         // §3.3: closed casters cast only light-back-facing triangles (an option; off by default).
         penumbra::AliasFreeHardShadows back_faces = makePipeline(penumbra::AfhPrecision::Exact, false, true);
+        // The compute light pass (AfhLightPass::Compute): the hard method's options, casters as buffers.
+        const std::vector<penumbra::CasterBuffer>& casters = f.gpu->casterBuffers();
+        const uint32_t ranges = static_cast<uint32_t>(casters.size());
+        penumbra::AliasFreeHardOptions compute_options = f.options(penumbra::AfhPrecision::Exact, false);
+        compute_options.light_pass = penumbra::AfhLightPass::Compute;
+        penumbra::AliasFreeHardShadows compute(compute_options);
+        compute.reserve(n);
+        compute.validate(f.input(), n);
+        compute.validateCasters(casters.data(), ranges);
         std::vector<std::unique_ptr<ShadowMap>> maps;
         for (uint32_t res : shadowMapSizes()) maps.push_back(std::make_unique<ShadowMap>(f, res));
 
@@ -415,6 +429,10 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         methods.push_back({"hard_fp64", pipelineRun(hard_fp64), {}, {}});
         methods.push_back({"fast", pipelineRun(fast), {}, {}});
         methods.push_back({"hard_back_faces", pipelineRun(back_faces), {}, {}});
+        methods.push_back({"hard_compute",
+                           [&] { runs_ok &= compute.run(input, n, f.light, casters.data(), ranges) == penumbra::Status::Ok; },
+                           {},
+                           {}});
         for (const auto& m : maps) {
             const ShadowMap* map = m.get();
             methods.push_back({"map" + std::to_string(map->resolution()), [map] { map->run(); }, {}, {}});
@@ -451,6 +469,7 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         state.counters["filtered_over_fp64"] = ratio(ms("hard"), ms("hard_fp64"));
         state.counters["fast_over_exact"] = ratio(ms("fast"), ms("hard"));
         state.counters["back_faces_over_all"] = ratio(ms("hard_back_faces"), ms("hard"));
+        state.counters["raster_over_compute"] = ratio(ms("hard"), ms("hard_compute"));  // > 1: compute is faster
         state.counters["timer_gl_time_elapsed"] = query_measures ? 1.0 : 0.0;
 
         // Read-backs and errors (after the timed runs: the last iteration's results).
@@ -461,6 +480,8 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         // Per sample id (the shadow-bit words are per list slot, and a list's slot order follows
         // the scatter's atomics, so two runs' words may be permuted; the states are the resolved bits).
         state.counters["same_bits_fp64"] = hard_states == fp64_states ? 1.0 : 0.0;
+        const std::vector<uint32_t> compute_states = compute.stateBuffer().download<uint32_t>(0, n);
+        state.counters["same_bits_compute"] = hard_states == compute_states ? 1.0 : 0.0;
 
         const ref::HardComparison exact = ref::compareHardStates(f.tested, hard_states);
         state.counters["err_mismatch"] = exact.mismatchRate();
@@ -469,6 +490,7 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         state.counters["ties"] = double(exact.ties);
         state.counters["err_mismatch_fp64"] = ref::compareHardStates(f.tested, fp64_states).mismatchRate();
         state.counters["err_mismatch_fast"] = ref::compareHardStates(f.tested, fast_states).mismatchRate();
+        state.counters["err_mismatch_compute"] = ref::compareHardStates(f.tested, compute_states).mismatchRate();
         const ref::HardComparison back = ref::compareHardStates(f.tested, back_faces_states);
         state.counters["err_mismatch_back_faces"] = back.mismatchRate();
         state.counters["err_mismatch_back_faces_count"] = double(back.mismatched);
@@ -516,6 +538,19 @@ void BM_HardShadows(benchmark::State& state, const SceneSpec& spec) {
         state.counters["overflow"] = double(frame.overflow);
         state.counters["fallbacks"] = double(frame.fallbacks);
         state.counters["fallback_rate"] = frame.tests ? double(frame.fallbacks) / double(frame.tests) : 0.0;
+        // The compute light pass's work, counted the same way (untimed).
+        compute_options.count_work = true;
+        penumbra::AliasFreeHardShadows compute_counting(compute_options);
+        compute_counting.reserve(n);
+        if (compute_counting.run(input, n, f.light, casters.data(), ranges) != penumbra::Status::Ok) {
+            state.SkipWithError("AliasFreeHardShadows::run (compute, count_work) returned an error Status");
+            return;
+        }
+        const penumbra::AliasFreeHardFrame cf = compute_counting.readFrame();
+        state.counters["compute_items"] = double(cf.items);
+        state.counters["compute_texels"] = double(cf.fragments);
+        state.counters["compute_chunks"] = double(cf.chunks);
+        state.counters["compute_tests_per_sample"] = f.tested.ids.empty() ? 0.0 : double(cf.tests) / double(f.tested.ids.size());
         state.counters["shadow_map_texels_max"] = double(shadowMapSizes().back()) * double(shadowMapSizes().back());
 
         // Leave no binding of ours behind for the next entry.

@@ -717,7 +717,7 @@ TEST_CASE("Compute light pass misuse: options and casters throw or return a Stat
     // The chunk: the default, and the grid's cap on (triangle, tile) items.
     CHECK(penumbra::afhComputeChunk(o) == penumbra::kAfhDefaultComputeTriangles);
     o.grid_width = o.grid_height = 4096;
-    CHECK(penumbra::afhComputeChunk(o) == 4096u);  // 2^31 / (512 * 1024 tiles)
+    CHECK(penumbra::afhComputeChunk(o) == 8192u);  // 2^31 / (512 * 512 tiles of 8 x 8)
     o.grid_width = o.grid_height = 32;
 
     Fixture f(penumbra::scene::builtin("columns"), 32, 32);

@@ -922,7 +922,9 @@ TEST_CASE("cpu: the twin's hull covers every required pixel; fixed6 contains exa
 namespace {
 
 /// The compute light passes' coverage (penumbraConservativeEmit with PENUMBRA_CONSERVATIVE_BOX_ONLY,
-/// then penumbraConservativeBoxPixels and the box test per pixel centre), through the CPU twin:
+/// then penumbraConservativeBoxPixels, the box test per pixel centre and, for unclipped triangles
+/// that are not thin, penumbraConservativeRectMeetsDilatedTriangle on the pixel's 8 x 8 tile and
+/// penumbraConservativeInsideDilatedTriangle on the pixel), through the CPU twins:
 /// every pixel the exact predicate requires is visited. Returns the pixels visited.
 uint64_t checkBoxPixels(const ConservativeRasterSetup& setup, const TestTriangle& t, uint64_t& missed) {
     const glm::ivec4 viewport(setup.options.viewport_x, setup.options.viewport_y, setup.width(), setup.height());
@@ -933,10 +935,17 @@ uint64_t checkBoxPixels(const ConservativeRasterSetup& setup, const TestTriangle
         return 0;
     }
     const glm::ivec4 range = penumbra::conservativeBoxPixels(hull.box, viewport);
+    const bool triangle = hull.kind == ConservativeHullKind::Triangle;
     auto visited = [&](glm::ivec2 p) {  // window pixel
         const glm::vec2 centre = glm::vec2(p) + 0.5f;
+        const glm::vec2 relative = glm::vec2(p - glm::ivec2(viewport)) + 0.5f;
+        // Its 8 x 8 tile of the range (the hard compute pass's), culled as a whole first.
+        const glm::ivec2 tile = glm::ivec2(range) + ((p - glm::ivec2(range)) / 8) * 8 - glm::ivec2(viewport);
+        const glm::vec2 tile_lo = glm::vec2(tile) + 0.5f, tile_hi = tile_lo + 7.0f;
         return p.x >= range.x && p.y >= range.y && p.x <= range.z && p.y <= range.w && centre.x >= hull.box.x &&
-               centre.y >= hull.box.y && centre.x <= hull.box.z && centre.y <= hull.box.w;
+               centre.y >= hull.box.y && centre.x <= hull.box.z && centre.y <= hull.box.w &&
+               (!triangle || (penumbra::conservativeRectMeetsDilatedTriangle(tile_lo, tile_hi, hull.triangle, hull.dilation) &&
+                              penumbra::conservativeInsideDilatedTriangle(relative, hull.triangle, hull.dilation)));
     };
     for (const auto& p : required) {
         if (!visited(p + glm::ivec2(viewport))) {

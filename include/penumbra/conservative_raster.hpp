@@ -299,6 +299,11 @@ struct ConservativeHull {
     std::array<glm::vec2, kConservativeMaxVertices> pixels{};     ///< hull, CCW, viewport-relative pixels
     std::array<glm::vec4, kConservativeMaxVertices> positions{};  ///< emitted gl_Position, strip order
     glm::vec4 box{};  ///< window-space (xmin, ymin, xmax, ymax) handed to the fragment stage
+    /// kind == Triangle: the unclipped triangle in viewport-relative pixels, counter-clockwise, and
+    /// the dilation h of the hull around it (conservativeInsideDilatedTriangle; the compute light
+    /// passes' per-pixel test).
+    std::array<glm::vec2, 3> triangle{};
+    float dilation = 0.0f;
     /// Fixed6 two-pass plan: the direct pass spilled it (conservativeNeedsSpill) and the spill
     /// pass emitted this hull; false in the single pass (Exact) and for direct-pass hulls.
     bool spilled = false;
@@ -565,6 +570,8 @@ inline ConservativeHull conservativeHull(const glm::vec4& clip0, const glm::vec4
     } else if (area2 < 0.0f) {
         std::reverse(polygon, polygon + n);
     }
+    if (inside && !thin) out.triangle = {polygon[0], polygon[1], polygon[2]};
+    out.dilation = h;
 
     glm::vec2 lo = polygon[0], hi = polygon[0];
     for (int i = 1; i < n; ++i) {
@@ -751,6 +758,38 @@ inline glm::ivec4 conservativeBoxPixels(const glm::vec4& box, const glm::ivec4& 
     const glm::ivec2 hi = glm::min(glm::ivec2(std::floor(box.z), std::floor(box.w)) + 1,
                                    glm::ivec2(viewport.x + viewport.z - 1, viewport.y + viewport.w - 1));
     return glm::ivec4(lo, hi);
+}
+
+/// CPU twin of penumbraConservativeInsideDilatedTriangle (conservative_raster_clip.glsl): does the
+/// point `centre` (viewport-relative pixels) lie in the counter-clockwise triangle `t` dilated by
+/// the square [-h, h]^2 within its edges' half-planes? Together with the box (the square's own
+/// sides) that is the exact hull's region. In double: every edge vector and difference of floats
+/// is exact there, so each side test rounds once (a relative slack of 1e-9 covers it).
+inline bool conservativeInsideDilatedTriangle(const glm::vec2& centre, const std::array<glm::vec2, 3>& t, float h) {
+    for (int i = 0; i < 3; ++i) {
+        const glm::dvec2 a(t[size_t(i)]), b(t[size_t((i + 1) % 3)]);
+        const glm::dvec2 n(b.y - a.y, a.x - b.x);  // outward normal of a counter-clockwise edge
+        const double side = n.x * (double(centre.x) - a.x) + n.y * (double(centre.y) - a.y);
+        const double support = double(h) * (std::abs(n.x) + std::abs(n.y));
+        if (side > support * (1.0 + 1e-9)) return false;
+    }
+    return true;
+}
+
+/// CPU twin of penumbraConservativeRectMeetsDilatedTriangle: false only when no point of the
+/// rectangle [lo, hi] passes conservativeInsideDilatedTriangle(point, t, h) (each edge's smallest
+/// side value over the rectangle is at the corner its normal points away from).
+inline bool conservativeRectMeetsDilatedTriangle(const glm::vec2& lo, const glm::vec2& hi, const std::array<glm::vec2, 3>& t,
+                                                 float h) {
+    for (int i = 0; i < 3; ++i) {
+        const glm::dvec2 a(t[size_t(i)]), b(t[size_t((i + 1) % 3)]);
+        const glm::dvec2 n(b.y - a.y, a.x - b.x);
+        const glm::vec2 corner(n.x > 0.0 ? lo.x : hi.x, n.y > 0.0 ? lo.y : hi.y);
+        const double side = n.x * (double(corner.x) - a.x) + n.y * (double(corner.y) - a.y);
+        const double support = double(h) * (std::abs(n.x) + std::abs(n.y));
+        if (side > support * (1.0 + 1e-9)) return false;
+    }
+    return true;
 }
 
 /// Ground truth, part 1: the triangle clipped to the near plane and w >= min_w (and, to keep the

@@ -71,7 +71,7 @@ enum class AfhPrecision { Exact, Fast };
 ///   Compute: casters as buffers (CasterBuffer, with the caster hook
 ///            penumbra/sample_based_soft/caster_buffer.glsl); a setup pass per triangle (the same
 ///            culls and the emitter's pixel-expanded box, bit for bit), a scan, and a tiles pass
-///            of one work group per (triangle, 8 x 4 texels of its box): no draw, query, stencil or
+///            of one work group per (triangle, 8 x 8 texels of its box): no draw, query, stencil or
 ///            framebuffer; no geometry shader is compiled. Same shadow bits and states.
 enum class AfhLightPass { Raster, Compute };
 
@@ -317,12 +317,19 @@ inline uint64_t afhSpillWorldBytes(uint32_t capacity) {
 }
 
 /// The compute light pass's chunk: compute_triangles (or its default), lowered so that the
-/// chunk's (triangle, 8 x 4 tile) items stay below 2^31 when every triangle covers the grid.
+/// chunk's (triangle, 8 x 8 tile) items stay below 2^31 when every triangle covers the grid.
 inline uint32_t afhComputeChunk(const AliasFreeHardOptions& o) {
     const uint64_t wanted = o.compute_triangles != 0 ? o.compute_triangles : kAfhDefaultComputeTriangles;
     const uint64_t tiles = uint64_t((o.grid_width + PENUMBRA_AFH_TILE_WIDTH - 1) / PENUMBRA_AFH_TILE_WIDTH) *
                            ((o.grid_height + PENUMBRA_AFH_TILE_HEIGHT - 1) / PENUMBRA_AFH_TILE_HEIGHT);
     return static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(wanted, (uint64_t(1) << 31) / std::max<uint64_t>(tiles, 1))));
+}
+
+/// The compute light pass's tiles items one work group works in turn: 16, fewer for long list
+/// blocks so that an invocation's loops stay below 2^15 iterations in all (llvmpipe ends an
+/// invocation's loops after 65 535; a tile's item is a search of ~17 steps and one list block).
+inline uint32_t afhComputeItemsPerGroup(const AliasFreeHardOptions& o) {
+    return std::clamp<uint32_t>(32768u / (o.list_block + 32u), 1u, 16u);
 }
 
 inline void validateAliasFreeHardOptions(const AliasFreeHardOptions& o, const glm::vec4& light) {

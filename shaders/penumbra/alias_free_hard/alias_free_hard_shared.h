@@ -63,12 +63,14 @@
 // The compute light pass's work items: one work group per (triangle, tile of its texel box), a
 // tile PENUMBRA_AFH_TILE_WIDTH x PENUMBRA_AFH_TILE_HEIGHT texels, one invocation per texel.
 #define PENUMBRA_AFH_TILE_WIDTH 8
-#define PENUMBRA_AFH_TILE_HEIGHT 4
+#define PENUMBRA_AFH_TILE_HEIGHT 8
 #define PENUMBRA_AFH_SETUP_GROUP 64
 // A triangle record: words 0-8 the world vertices (float bits, as read from the caster hook),
 // 9 = first texel (x | y << 16), 10 = last texel (x | y << 16), 11 = tiles per row of its box,
-// 12-15 the emitter's pixel-expanded box (float bits: xmin, ymin, xmax, ymax).
-#define PENUMBRA_AFH_TRIANGLE_WORDS 16
+// 12-15 the emitter's pixel-expanded box (float bits: xmin, ymin, xmax, ymax), 16-21 the
+// unclipped triangle in pixels (float bits, counter-clockwise), 22 = the dilation h (float bits;
+// 0 = no triangle test: clipped or thin, the box alone), 23 unused.
+#define PENUMBRA_AFH_TRIANGLE_WORDS 24
 // The args buffer: per list block b (< 64) words 4 b .. 4 b + 2 = the x, y, z groups of block b's
 // tiles pass (glDispatchComputeIndirect; 0 groups where no list reaches block b), 4 b + 3 = the
 // chunk's items.

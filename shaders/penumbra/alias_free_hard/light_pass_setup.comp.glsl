@@ -3,7 +3,8 @@
 // vertex and geometry stages do, without drawing: the culls (cull.glsl), the light's clip
 // coordinates, and the conservative emitter's pixel-expanded box (conservative_raster.glsl with
 // PENUMBRA_CONSERVATIVE_BOX_ONLY: the same bits as the geometry stage's). It writes the
-// triangle's record (world vertices, the texels whose centres the box holds, the box) and its
+// triangle's record (world vertices, the texels whose centres the box holds, the box and, for an
+// unclipped triangle that is not thin, the triangle in pixels and the hull's dilation) and its
 // count of tiles of that texel range for the tiles pass (light_pass_tiles.comp.glsl); a culled or
 // dropped triangle counts 0 tiles. The triangles come from the caster hook (caster_buffer.glsl).
 // Defines: the conservative emitter's (PENUMBRA_CONSERVATIVE_EXACT does not change the box),
@@ -88,6 +89,11 @@ void main() {
     penumbraAfhTriangles[base + 13u] = floatBitsToUint(box.y);
     penumbraAfhTriangles[base + 14u] = floatBitsToUint(box.z);
     penumbraAfhTriangles[base + 15u] = floatBitsToUint(box.w);
+    for (int i = 0; i < 3; ++i) {
+        penumbraAfhTriangles[base + 16u + 2u * uint(i)] = floatBitsToUint(penumbraConservativePolygon[i].x);
+        penumbraAfhTriangles[base + 17u + 2u * uint(i)] = floatBitsToUint(penumbraConservativePolygon[i].y);
+    }
+    penumbraAfhTriangles[base + 22u] = floatBitsToUint(penumbraConservativeBoxTriangle ? penumbraConservativeBoxDilation : 0.0);
     penumbraAfhItems[record] = tiles.x * tiles.y;
 #if PENUMBRA_AFH_COUNT_WORK
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TRIANGLES], 1u);

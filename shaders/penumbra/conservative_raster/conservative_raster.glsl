@@ -34,7 +34,9 @@
 //             PENUMBRA_CONSERVATIVE_BOX_ONLY 1 = any stage (compute included): no hook, nothing
 //             emitted; penumbraConservativeEmit returns 1 and leaves the pixel-expanded box it
 //             would hand to the hook in penumbraConservativeBoxOut, or returns 0 where the
-//             triangle is dropped (the same bits as the emitting build: steps 1 to 5 below).
+//             triangle is dropped (the same bits as the emitting build: steps 1 to 5 below);
+//             for an unclipped, not thin triangle also the triangle and the dilation
+//             (penumbraConservativeBoxTriangle).
 //   predicate: bool penumbraConservativeNeedsSpill(vec4 clip0, vec4 clip1, vec4 clip2, params):
 //             finite, not entirely outside one clipping plane, and not every vertex inside all of
 //             them (the 6-vertex hull covers only unclipped triangles). CPU twin:
@@ -108,6 +110,11 @@ float penumbraConservativeDepth[PENUMBRA_CONSERVATIVE_MAX_POLYGON];
 vec2 penumbraConservativeHull[PENUMBRA_CONSERVATIVE_MAX_VERTICES];
 #if PENUMBRA_CONSERVATIVE_BOX_ONLY
 vec4 penumbraConservativeBoxOut;  // the last penumbraConservativeEmit's box (when it returned 1)
+// ... and when true, its unclipped triangle, counter-clockwise in viewport-relative pixels, in
+// penumbraConservativePolygon[0 .. 2], which the hull dilates by penumbraConservativeBoxDilation
+// (penumbraConservativeInsideDilatedTriangle); false: clipped or thin, the box alone.
+bool penumbraConservativeBoxTriangle;
+float penumbraConservativeBoxDilation;
 #endif
 
 // dot(near_plane, c) in float, left to right, no FMA (the twin computes the same bits).
@@ -378,6 +385,8 @@ int penumbraConservativeEmit(vec4 clip0, vec4 clip1, vec4 clip2, PenumbraConserv
     vec4 box = vec4(lo + params.viewport.xy, hi + params.viewport.xy);
 #if PENUMBRA_CONSERVATIVE_BOX_ONLY
     penumbraConservativeBoxOut = box;
+    penumbraConservativeBoxTriangle = inside && !thin;
+    penumbraConservativeBoxDilation = h;
     return 1;
 #else
 

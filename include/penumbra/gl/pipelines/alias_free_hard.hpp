@@ -248,6 +248,7 @@ private:
         defines.push_back({"PENUMBRA_AFH_TILES_ARGS", "1"});
         tiles_args_ = gl::buildComputeProgram("penumbra/alias_free_hard/light_pass_tiles.comp.glsl", defines, library);
         chunk_ = afhComputeChunk(options_);
+        items_per_group_ = afhComputeItemsPerGroup(options_);
         triangles_ = gl::Buffer(size_t(chunk_) * PENUMBRA_AFH_TRIANGLE_WORDS * 4);
         items_ = gl::Buffer(size_t(chunk_) * 4);
         args_ = gl::Buffer(PENUMBRA_AFH_ARGS_WORDS * 4);
@@ -396,7 +397,7 @@ private:
     gl::Program setup_program_, tiles_, tiles_args_;
     gl::Buffer triangles_, items_, args_, dummy_;
     std::optional<Scanner> scanner_;  // compute only: a Scanner compiles its kernels when constructed
-    uint32_t chunk_ = 0, chunks_ = 0, ssbo_alignment_ = 256;
+    uint32_t chunk_ = 0, chunks_ = 0, items_per_group_ = 1, ssbo_alignment_ = 256;
     gl::Renderbuffer stencil_;  // skip_empty_texels: W x H, non-empty list blocks per texel
     gl::Buffer conservative_params_, afh_params_, work_;
     gl::Buffer spill_, spill_world_;  // two-pass only: spill header + triangles, spill-world header + vertices
@@ -521,10 +522,12 @@ private:
             tiles_args_.use();
             glProgramUniform1ui(tiles_args_.id(), 0, filled);
             glProgramUniform2ui(tiles_args_.id(), 1, options_.list_block, options_.max_list_blocks);
+            glProgramUniform1ui(tiles_args_.id(), 2, items_per_group_);
             glDispatchCompute(1, 1, 1);
             glMemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
             tiles_.use();
             glProgramUniform1ui(tiles_.id(), 0, filled);
+            glProgramUniform1ui(tiles_.id(), 1, items_per_group_);
             gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.counts, lists_.counts.id());
             gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.offsets, lists_.offsets.id());
             gl::bindBase(GL_SHADER_STORAGE_BUFFER, bindings_.positions, lists_.positions.id());
