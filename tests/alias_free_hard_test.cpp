@@ -412,8 +412,10 @@ TEST_CASE("0 mismatches against the oracle on every scene, three point lights, b
                 o.grid_height = height;
                 penumbra::AliasFreeHardShadows pipeline(o);
                 const auto states = runPipeline(pipeline, f, light, v);
-                // The compute light pass: the same states and shadow bits.
-                checkComputeEqualsRaster(pipeline, states, f, light, v);
+                // The compute light pass: the same states and shadow bits (the sanitizer build:
+                // the scene's own light only; the Release run takes all three).
+                if (!penumbra::test::kSanitized || position == lightPositions(f.scene).front())
+                    checkComputeEqualsRaster(pipeline, states, f, light, v);
                 // Exactness: the oracle on the very same float positions the GPU tested (for the
                 // depth input, its own reconstruction read back from the lists).
                 const Comparison c =

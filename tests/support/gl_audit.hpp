@@ -192,6 +192,19 @@ public:
     const char* call(size_t i) const { return i < size_ ? log_[i] : nullptr; }
     /// The recorded names in call order (allocates: use after stop()).
     std::vector<std::string> names() const { return std::vector<std::string>(log_.begin(), log_.begin() + size_); }
+    /// Calls of the graphics pipeline in the log (draws, queries, conditional rendering, stencil,
+    /// framebuffer, viewport and vertex-array calls), each also reported as a doctest MESSAGE by
+    /// the caller if it likes: the compute light passes must make none.
+    std::vector<std::string> graphicsCalls() const {
+        std::vector<std::string> out;
+        for (const std::string& name : names())
+            for (const char* word : {"Draw", "Query", "ConditionalRender", "Stencil", "Framebuffer", "Viewport", "VertexArray"})
+                if (name.find(word) != std::string::npos) {
+                    out.push_back(name);
+                    break;
+                }
+        return out;
+    }
 
     size_t count(GlCallKind kind) const {
         size_t n = 0;

@@ -19,29 +19,10 @@
 #define PENUMBRA_AFH_SKIP_SHADOWED 1
 #endif
 
-layout(std140, binding = PENUMBRA_AFH_PARAMS_BINDING) uniform PenumbraAfhParamsBlock {
-    PenumbraAfhParams penumbraAfhParams;
-};
-layout(std430, binding = PENUMBRA_AFH_COUNTS_BINDING) readonly buffer PenumbraAfhCounts { uint penumbraAfhCounts[]; };
-layout(std430, binding = PENUMBRA_AFH_OFFSETS_BINDING) readonly buffer PenumbraAfhOffsets { uint penumbraAfhOffsets[]; };
-layout(std430, binding = PENUMBRA_AFH_POSITIONS_BINDING) readonly buffer PenumbraAfhPositions { vec4 penumbraAfhPositions[]; };
-layout(std430, binding = PENUMBRA_AFH_SHADOW_BINDING) coherent buffer PenumbraAfhShadow { uint penumbraAfhShadow[]; };
 #if PENUMBRA_AFH_COUNT_WORK
 layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uint penumbraAfhWork[]; };
 #endif
-
-#define PENUMBRA_SAMPLE_LISTS_LOAD_COUNT(list) penumbraAfhCounts[list]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_OFFSET(list) penumbraAfhOffsets[list]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_POSITION(slot) penumbraAfhPositions[slot]
-#define PENUMBRA_SAMPLE_LISTS_LOAD_ID(slot) 0u
-#define PENUMBRA_SAMPLE_LISTS_GRID_WIDTH penumbraAfhParams.grid.x
-#define PENUMBRA_SAMPLE_LISTS_SHADOW_BITS 1
-#define PENUMBRA_SAMPLE_LISTS_SHADOW_OR(word, mask) atomicOr(penumbraAfhShadow[word], mask)
-#define PENUMBRA_SAMPLE_LISTS_LOAD_SHADOW(word) penumbraAfhShadow[word]
-#include "penumbra/sample_lists/sample_lists.glsl"
-#include "penumbra/sample_lists/shadow_bits.glsl"
-#include "penumbra/conservative_raster/conservative_raster_clip.glsl"
-#include "penumbra/alias_free_hard/blocker_test.glsl"
+#include "penumbra/alias_free_hard/light_pass_lists.glsl"
 
 // skip_empty_texels: the pipeline's occupancy stencil (occupancy.frag.glsl) culls the fragments of
 // texels whose list block is empty before they are shaded, which needs the test before the stores.
