@@ -15,9 +15,6 @@
 #ifndef PENUMBRA_CONSERVATIVE_CLIP_TO_BOX
 #define PENUMBRA_CONSERVATIVE_CLIP_TO_BOX 1
 #endif
-#ifndef PENUMBRA_AFH_SKIP_SHADOWED
-#define PENUMBRA_AFH_SKIP_SHADOWED 1
-#endif
 
 #if PENUMBRA_AFH_COUNT_WORK
 layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uint penumbraAfhWork[]; };
@@ -44,29 +41,8 @@ void main() {
     }
 #endif
     const uvec2 range = penumbraSampleListsBlock(ivec2(gl_FragCoord.xy), penumbraAfhParams.pass.x, penumbraAfhParams.grid.z);
-    const float reach = penumbraAfhParams.tolerance.z;
-    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
-    const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
-    const double scene_extent = penumbraAfhParams.exact.y;  // E of the coplanar rule's scale
     uint tests = 0u, fallbacks = 0u, skipped = 0u;
-    for (uint slot = range.x; slot < range.x + range.y; ++slot) {
-        // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
-#if PENUMBRA_AFH_SKIP_SHADOWED
-        if (penumbraSampleListsShadowBit(slot, 0u)) {
-            ++skipped;
-            continue;
-        }
-#endif
-        const vec3 p = penumbraSampleListsPosition(slot);
-        ++tests;
-        // Directional light: the light point on the sample's own ray, `reach` away (exact: the
-        // segment is parallel to the light direction; casters must lie within reach). Exact mode:
-        // filtered (float with a proven bound, double where uncertain) unless PENUMBRA_AFH_FILTERED 0.
-        if (penumbraAfhBlocksLightCounted(penumbraAfhVertex0, penumbraAfhVertex1, penumbraAfhVertex2, p,
-                                          penumbraAfhParams.light, reach, eps, offset, scene_extent, fallbacks)) {
-            penumbraSampleListsSetShadowBit(slot, 0u);
-        }
-    }
+    penumbraAfhWalk(range, penumbraAfhVertex0, penumbraAfhVertex1, penumbraAfhVertex2, tests, fallbacks, skipped);
 #if PENUMBRA_AFH_COUNT_WORK
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], 1u);
     atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_TESTS], tests);

@@ -26,4 +26,35 @@ layout(std430, binding = PENUMBRA_AFH_SHADOW_BINDING) coherent buffer PenumbraAf
 #include "penumbra/conservative_raster/conservative_raster_clip.glsl"
 #include "penumbra/alias_free_hard/blocker_test.glsl"
 
+
+#ifndef PENUMBRA_AFH_SKIP_SHADOWED
+#define PENUMBRA_AFH_SKIP_SHADOWED 1
+#endif
+
+// Walks the list slots `range` (first, count) and sets the shadow bit of every sample the triangle
+// (v0, v1, v2) blocks from the parameter block's light; counts tests, fp64 fallbacks and samples
+// skipped because another caster already shadowed them (OR is idempotent: same bits).
+void penumbraAfhWalk(uvec2 range, vec3 v0, vec3 v1, vec3 v2, inout uint tests, inout uint fallbacks, inout uint skipped) {
+    // Directional light: the light point on the sample's own ray, `reach` away (exact: the segment
+    // is parallel to the light direction; casters must lie within reach). Exact mode: filtered
+    // (float with a proven bound, double where uncertain) unless PENUMBRA_AFH_FILTERED 0.
+    const float reach = penumbraAfhParams.tolerance.z;
+    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
+    const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
+    const double scene_extent = penumbraAfhParams.exact.y;  // E of the coplanar rule's scale
+    for (uint slot = range.x; slot < range.x + range.y; ++slot) {
+#if PENUMBRA_AFH_SKIP_SHADOWED
+        if (penumbraSampleListsShadowBit(slot, 0u)) {
+            ++skipped;
+            continue;
+        }
+#endif
+        ++tests;
+        if (penumbraAfhBlocksLightCounted(v0, v1, v2, penumbraSampleListsPosition(slot), penumbraAfhParams.light, reach, eps,
+                                          offset, scene_extent, fallbacks)) {
+            penumbraSampleListsSetShadowBit(slot, 0u);
+        }
+    }
+}
+
 #endif

@@ -28,9 +28,6 @@
 #ifndef PENUMBRA_AFH_COUNT_WORK
 #define PENUMBRA_AFH_COUNT_WORK 0
 #endif
-#ifndef PENUMBRA_AFH_SKIP_SHADOWED
-#define PENUMBRA_AFH_SKIP_SHADOWED 1
-#endif
 
 layout(std430, binding = PENUMBRA_AFH_ITEMS_BINDING) readonly buffer PenumbraAfhItems { uint penumbraAfhItems[]; };
 layout(std430, binding = PENUMBRA_AFH_WORK_BINDING) buffer PenumbraAfhWork { uint penumbraAfhWork[]; };
@@ -76,10 +73,6 @@ layout(location = 1) uniform uint penumbraAfhItemsPerGroup;  // consecutive item
 void main() {
     const uint n = penumbraAfhChunkTriangles;
     const uint items = n > 0u ? penumbraAfhItems[n - 1u] : 0u;
-    const float reach = penumbraAfhParams.tolerance.z;
-    const penumbraAfhReal eps = penumbraAfhReal(penumbraAfhParams.exact.x);  // double in exact mode, as the oracle's
-    const penumbraAfhReal offset = penumbraAfhReal(penumbraAfhParams.tolerance.y);
-    const double scene_extent = penumbraAfhParams.exact.y;
     uint texels = 0u, tests = 0u, fallbacks = 0u, skipped = 0u;
     const uint first_item = penumbraLinearGroup() * penumbraAfhItemsPerGroup;
     const uint end_item = min(first_item + penumbraAfhItemsPerGroup, items);
@@ -121,20 +114,7 @@ void main() {
         const vec3 v0 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base], penumbraAfhTriangles[base + 1u], penumbraAfhTriangles[base + 2u]));
         const vec3 v1 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base + 3u], penumbraAfhTriangles[base + 4u], penumbraAfhTriangles[base + 5u]));
         const vec3 v2 = uintBitsToFloat(uvec3(penumbraAfhTriangles[base + 6u], penumbraAfhTriangles[base + 7u], penumbraAfhTriangles[base + 8u]));
-        for (uint slot = range.x; slot < range.x + range.y; ++slot) {
-#if PENUMBRA_AFH_SKIP_SHADOWED
-            // A sample another caster already shadowed needs no test (OR is idempotent: same bits).
-            if (penumbraSampleListsShadowBit(slot, 0u)) {
-                ++skipped;
-                continue;
-            }
-#endif
-            ++tests;
-            if (penumbraAfhBlocksLightCounted(v0, v1, v2, penumbraSampleListsPosition(slot), penumbraAfhParams.light, reach, eps,
-                                              offset, scene_extent, fallbacks)) {
-                penumbraSampleListsSetShadowBit(slot, 0u);
-            }
-        }
+        penumbraAfhWalk(range, v0, v1, v2, tests, fallbacks, skipped);
     }
 #if PENUMBRA_AFH_COUNT_WORK
     if (texels > 0u) atomicAdd(penumbraAfhWork[PENUMBRA_AFH_WORK_FRAGMENTS], texels);
