@@ -4,8 +4,18 @@
 // alias_free_hard.hpp (no GL). Use it whole or copy it as a template.
 //
 // Integration summary
-//   needs:    a GL 4.5 context with fp64 in shaders (exact mode, GPU fit) and geometry shaders;
-//             PENUMBRA_GL_HEADER (gl/gl.hpp); shaders penumbra/alias_free_hard/*.
+//   needs:    a GL 4.5 context with fp64 in shaders (exact mode, GPU fit) and, for the raster
+//             light pass (the default), geometry shaders; PENUMBRA_GL_HEADER (gl/gl.hpp); shaders
+//             penumbra/alias_free_hard/*.
+//   compute:  options.light_pass = AfhLightPass::Compute: run() takes the casters as CasterBuffer
+//             ranges (validateCasters() once at load time) instead of a DrawCasters callback; the
+//             light pass is a setup dispatch per range piece, a scan and per list block one
+//             indirect tiles dispatch per chunk of compute_triangles triangles (same states; no
+//             draw, query, stencil or framebuffer; no geometry shader compiled). Its GL state:
+//             the current program, the AfhBindings storage bindings counts .. args and header,
+//             the uniform bindings params, frustum and 0 (conservative parameters), the
+//             GL_DISPATCH_INDIRECT_BUFFER binding (the args), and what the scanner binds
+//             (gl/scan.hpp), then the resolve's.
 //   setup:    AliasFreeHardShadows(options, library, bindings) compiles everything; reserve(max
 //             samples) allocates the lists, shadow bits, states and queries; validate(input, n)
 //             checks the integrator's ranges/textures once (GL queries, throws).
